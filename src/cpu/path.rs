@@ -1,0 +1,167 @@
+//! The path integrator: one camera sample's radiance estimate, as an iterative loop.
+//!
+//! `shaders/path.wgsl` is this function again, with the same names, the same steps in the same
+//! order and the same step comments; read the two side by side.
+//!
+//! The estimator is unidirectional path tracing with next-event estimation and multiple
+//! importance sampling (Veach's thesis, ch. 9): at each diffuse vertex, direct light is
+//! estimated twice, once by sampling a point on an emitter and once by the BSDF-sampled
+//! continuation ray hitting an emitter, and the two are combined with the power heuristic.
+//! Specular vertices (mirror, glass) cannot be reached by light sampling, so emission found
+//! after them is counted in full. Russian roulette ends paths without bias; there is no
+//! maximum depth.
+
+use crate::bsdf::sample_bsdf;
+use crate::bvh::{intersect_closest, occluded};
+use crate::camera::Camera;
+use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::sampling::{dim_bsdf, dim_light, power_heuristic, Sampler, DIM_CAMERA};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// Russian roulette starts at this bounce. The first bounces carry most of the image's energy
+/// and end few paths anyway, so rouletting them adds variance for little saved time; Mitsuba
+/// uses 5 and pbrt-v4 1, and 3 sits between.
+pub const RR_START_BOUNCE: u32 = 3;
+/// The survival probability is capped below 1 so that even paths of unit throughput (mirror
+/// corridors, white furnaces) end with probability 1.
+pub const RR_MAX_SURVIVAL: f32 = 0.95;
+
+/// Test-only changes to the integrator, for showing that the statistical tests reject a wrong
+/// renderer. The production path uses `Faults::NONE`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Faults {
+    /// Multiplies every mirror and glass reflection (1 when correct).
+    pub specular_scale: f32,
+}
+
+impl Faults {
+    pub const NONE: Faults = Faults {
+        specular_scale: 1.0,
+    };
+}
+
+impl Default for Faults {
+    fn default() -> Self {
+        Faults::NONE
+    }
+}
+
+/// The radiance arriving at pixel (x, y) along one camera sample's path.
+pub fn trace_path(
+    scene: &FlatScene,
+    camera: &Camera,
+    x: u32,
+    y: u32,
+    sampler: &Sampler,
+    faults: Faults,
+) -> Vec3 {
+    // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
+    let u_camera = sampler.draw4(DIM_CAMERA);
+    let mut ray = camera.ray(x, y, u_camera[0], u_camera[1]);
+
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    // Product of etap² over refractions; throughput x eta_scale is what roulette looks at, so
+    // that radiance scaling at glass boundaries does not end paths inside glass.
+    let mut eta_scale = 1.0f32;
+    // Solid-angle pdf of the BSDF sample that produced `ray`; 0 for the camera ray and after a
+    // specular bounce (no light-sampling strategy competes there).
+    let mut bsdf_pdf = 0.0f32;
+    let mut bounce = 0u32;
+
+    loop {
+        // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
+        // outside the scene, so a miss ends the path.
+        let Some(hit) = intersect_closest(scene, &ray, f32::INFINITY) else {
+            break;
+        };
+        let material = scene.materials[hit.material as usize];
+        let wo = -ray.d;
+        let cos_o = hit.n.dot(wo);
+
+        // Step 3 - emission: an emitter seen from its front. After the camera or a specular
+        // bounce it is counted in full; after a diffuse bounce it is weighted by the power
+        // heuristic against light sampling, whose pdf for this point is converted to solid
+        // angle at the previous vertex (the ray's direction is unit, so hit.t is the distance).
+        if material.kind == KIND_EMITTER && cos_o > 0.0 {
+            let le = Vec3::from(material.emission);
+            if bsdf_pdf == 0.0 {
+                radiance += throughput * le;
+            } else {
+                let light_pdf =
+                    area_to_solid_angle(emitter_pdf_area(scene, hit.prim), hit.t * hit.t, cos_o);
+                radiance += throughput * le * power_heuristic(bsdf_pdf, light_pdf);
+            }
+        }
+
+        // Step 4 - next-event estimation at diffuse surfaces: choose an emitter triangle by
+        // power and a uniform point on it, trace one shadow ray, and add
+        // f · Le · cos θs / p_ω(light), with p_ω the area pdf converted to solid angle,
+        // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
+        let u_light = sampler.draw4(dim_light(bounce));
+        let albedo = Vec3::from(material.color);
+        let diffuse = material.kind == KIND_DIFFUSE
+            || (material.kind == KIND_EMITTER && albedo.max_element() > 0.0);
+        if material.kind == KIND_EMITTER && !diffuse {
+            // A black emitter reflects nothing: the path ends here.
+            break;
+        }
+        if diffuse {
+            let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
+            let ls = sample_emitter(scene, u_light[0], u_light[1], u_light[2]);
+            let to_light = ls.p - hit.p;
+            let dist2 = to_light.length_squared();
+            let wi = to_light / dist2.sqrt();
+            let cos_s = n_facing.dot(wi);
+            let cos_l = -ls.n.dot(wi);
+            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
+                let target = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                let shadow = Ray {
+                    o: origin,
+                    d: target - origin,
+                };
+                if !occluded(scene, &shadow, 1.0) {
+                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                    let f = albedo * FRAC_1_PI;
+                    let w = power_heuristic(light_pdf, cos_s * FRAC_1_PI);
+                    radiance += throughput * f * ls.le * (cos_s * w / light_pdf);
+                }
+            }
+        }
+
+        // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
+        // the sample's weight f · |cos θi| / pdf.
+        let u_bsdf = sampler.draw4(dim_bsdf(bounce));
+        let bs = sample_bsdf(&material, hit.n, wo, u_bsdf);
+        throughput *= bs.weight;
+        if bs.pdf == 0.0 {
+            throughput *= faults.specular_scale;
+        }
+        eta_scale *= bs.eta2;
+        bsdf_pdf = bs.pdf;
+        if throughput.max_element() <= 0.0 {
+            break;
+        }
+        ray = Ray {
+            o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+            d: bs.wi,
+        };
+
+        // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
+        // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
+        // unbiased (E[X / q · 1{u < q}] = E[X]) while ending low-throughput paths.
+        if bounce >= RR_START_BOUNCE {
+            let q = (throughput.max_element() * eta_scale).min(RR_MAX_SURVIVAL);
+            if u_light[3] >= q {
+                break;
+            }
+            throughput /= q;
+        }
+        bounce += 1;
+    }
+    radiance
+}

@@ -1,0 +1,254 @@
+//! The shared flattened scene: plain-old-data arrays that the CPU integrator traverses and the
+//! WGSL shader reads byte for byte.
+//!
+//! Every struct here has a twin of the same name in `shaders/scene.wgsl`, and a test compares
+//! their sizes and field offsets with naga's reflection of the WGSL, so the two cannot drift.
+//! The layouts follow WGSL's storage-buffer rules: a `vec3<f32>` is 16-byte aligned and a scalar
+//! may fill its fourth lane, so each struct is a whole number of vec4s.
+
+use crate::bvh;
+use crate::scene::{MaterialDesc, Scene};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Material kinds (`Material::kind`).
+pub const KIND_DIFFUSE: u32 = 0;
+pub const KIND_MIRROR: u32 = 1;
+pub const KIND_GLASS: u32 = 2;
+pub const KIND_EMITTER: u32 = 3;
+
+/// Marks a triangle that is not in the emitter table (`Triangle::emitter`).
+pub const NOT_AN_EMITTER: u32 = u32::MAX;
+
+/// A primitive reference in `FlatScene::prims`: the index of a triangle, or of a sphere with this
+/// bit set.
+pub const PRIM_SPHERE_BIT: u32 = 1 << 31;
+
+/// A triangle: vertices as given (the winding fixes an emitter's front), its material, and its
+/// row in the emitter table. Three vec4s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Triangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    pub v1: [f32; 3],
+    pub emitter: u32,
+    pub v2: [f32; 3],
+    pub pad: u32,
+}
+
+/// A sphere. Two vec4s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Sphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: u32,
+    pub pad: [u32; 3],
+}
+
+/// A material: `color` is the albedo (diffuse, and an emitter's optional reflectance), the
+/// reflectance (mirror) or the tint (glass); `emission` is an emitter's radiance. Two vec4s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Material {
+    pub color: [f32; 3],
+    pub kind: u32,
+    pub emission: [f32; 3],
+    pub ior: f32,
+}
+
+/// One row of the emitter table: a triangle that emits, its area, and the discrete distribution
+/// that picks emitters in proportion to their power (area x mean radiance). One vec4.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Emitter {
+    pub triangle: u32,
+    pub area: f32,
+    /// Cumulative probability up to and including this row; the last row holds exactly 1.
+    pub cdf: f32,
+    /// The probability of choosing this row.
+    pub pmf: f32,
+}
+
+/// A BVH node in depth-first order (pbrt-v4's `LinearBVHNode`), two vec4s that WGSL reads as
+/// `vec3<f32>` + `u32` each. Interior: `offset` is the second child (the first follows the node)
+/// and `count` is 0. Leaf: `offset` is the first entry in `prims`, `count` > 0 entries.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    pub offset: u32,
+    pub max: [f32; 3],
+    /// Low 16 bits: primitive count (0 for interior nodes); bits 16..18: split axis.
+    pub count_axis: u32,
+}
+
+impl BvhNode {
+    #[inline]
+    pub fn count(&self) -> u32 {
+        self.count_axis & 0xffff
+    }
+    #[inline]
+    pub fn axis(&self) -> usize {
+        (self.count_axis >> 16) as usize
+    }
+}
+
+/// Everything the integrators read, in the layout both backends share.
+#[derive(Clone, Debug, Default)]
+pub struct FlatScene {
+    pub triangles: Vec<Triangle>,
+    pub spheres: Vec<Sphere>,
+    pub materials: Vec<Material>,
+    pub emitters: Vec<Emitter>,
+    pub nodes: Vec<BvhNode>,
+    pub prims: Vec<u32>,
+}
+
+fn f3(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+impl FlatScene {
+    /// Flattens a validated scene: materials in name order, triangles (boxes expanded after the
+    /// listed triangles), spheres, the emitter table, and the BVH over all primitives.
+    pub fn build(scene: &Scene) -> FlatScene {
+        let desc = &scene.desc;
+        let names: Vec<&String> = desc.materials.keys().collect();
+        let material_id = |name: &str| names.iter().position(|n| *n == name).unwrap() as u32;
+        let materials: Vec<Material> = desc
+            .materials
+            .values()
+            .map(|m| match m {
+                MaterialDesc::Diffuse { albedo } => Material {
+                    color: f3(*albedo),
+                    kind: KIND_DIFFUSE,
+                    ..Default::default()
+                },
+                MaterialDesc::Mirror { reflectance } => Material {
+                    color: f3(*reflectance),
+                    kind: KIND_MIRROR,
+                    ..Default::default()
+                },
+                MaterialDesc::Glass { ior, tint } => Material {
+                    color: f3(*tint),
+                    kind: KIND_GLASS,
+                    ior: *ior as f32,
+                    ..Default::default()
+                },
+                MaterialDesc::Emitter {
+                    radiance, albedo, ..
+                } => Material {
+                    color: f3(*albedo),
+                    kind: KIND_EMITTER,
+                    emission: f3(*radiance),
+                    ior: 0.0,
+                },
+            })
+            .collect();
+
+        let mut triangles: Vec<Triangle> = Vec::new();
+        let mut push = |v: [[f64; 3]; 3], material: &str| {
+            triangles.push(Triangle {
+                v0: f3(v[0]),
+                material: material_id(material),
+                v1: f3(v[1]),
+                emitter: NOT_AN_EMITTER,
+                v2: f3(v[2]),
+                pad: 0,
+            })
+        };
+        for t in &desc.triangles {
+            push(t.v, &t.material);
+        }
+        for b in &desc.boxes {
+            for v in b.triangles() {
+                push(v, &b.material);
+            }
+        }
+        let spheres: Vec<Sphere> = desc
+            .spheres
+            .iter()
+            .map(|s| Sphere {
+                center: f3(s.center),
+                radius: s.radius as f32,
+                material: material_id(&s.material),
+                pad: [0; 3],
+            })
+            .collect();
+
+        let emitters = build_emitter_table(&mut triangles, &materials);
+        let (nodes, prims) = bvh::build(&triangles, &spheres);
+        FlatScene {
+            triangles,
+            spheres,
+            materials,
+            emitters,
+            nodes,
+            prims,
+        }
+    }
+
+    /// The bounding box of the whole scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let root = &self.nodes[0];
+        (Vec3::from(root.min), Vec3::from(root.max))
+    }
+}
+
+/// Area of a triangle in f32, as the integrators compute it.
+pub fn triangle_area(t: &Triangle) -> f32 {
+    let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+    0.5 * (v1 - v0).cross(v2 - v0).length()
+}
+
+/// The emitter table: every triangle whose material emits, chosen with probability proportional
+/// to its power (area x mean of the RGB radiance; the pi of Lambertian emission is common to all
+/// and cancels). Sets each emitting triangle's `emitter` row.
+fn build_emitter_table(triangles: &mut [Triangle], materials: &[Material]) -> Vec<Emitter> {
+    let mut rows = Vec::new();
+    let mut powers = Vec::new();
+    for (i, t) in triangles.iter().enumerate() {
+        let m = &materials[t.material as usize];
+        let mean_le = (m.emission[0] + m.emission[1] + m.emission[2]) as f64 / 3.0;
+        if m.kind == KIND_EMITTER && mean_le > 0.0 {
+            let area = triangle_area(t);
+            rows.push(Emitter {
+                triangle: i as u32,
+                area,
+                cdf: 0.0,
+                pmf: 0.0,
+            });
+            powers.push(area as f64 * mean_le);
+        }
+    }
+    let total: f64 = powers.iter().sum();
+    let mut acc = 0.0f64;
+    for (row, p) in rows.iter_mut().zip(&powers) {
+        acc += p;
+        row.pmf = (p / total) as f32;
+        row.cdf = (acc / total) as f32;
+    }
+    if let Some(last) = rows.last_mut() {
+        last.cdf = 1.0;
+    }
+    for (k, row) in rows.iter().enumerate() {
+        triangles[row.triangle as usize].emitter = k as u32;
+    }
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shared_structs_are_whole_vec4s() {
+        assert_eq!(std::mem::size_of::<Triangle>(), 48);
+        assert_eq!(std::mem::size_of::<Sphere>(), 32);
+        assert_eq!(std::mem::size_of::<Material>(), 32);
+        assert_eq!(std::mem::size_of::<Emitter>(), 16);
+        assert_eq!(std::mem::size_of::<BvhNode>(), 32);
+    }
+}

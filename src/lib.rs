@@ -1,0 +1,21 @@
+//! hexray: a physically based Monte Carlo path tracer with a WGSL compute-shader backend and a
+//! CPU reference backend that follow one algorithm step by step.
+//!
+//! Data flows one way: a scene file is parsed and validated ([`scene`]), flattened into the
+//! plain-old-data arrays both backends read ([`flat`], with its [`bvh`]), rendered
+//! progressively into a [`film::Film`] of per-pixel sums ([`render`], [`cpu`]), and written as
+//! EXR and PNG ([`output`]). [`stats`] holds the statistics the tests and tools share.
+
+pub mod bsdf;
+pub mod bvh;
+pub mod camera;
+pub mod cpu;
+pub mod film;
+pub mod flat;
+pub mod geometry;
+pub mod light;
+pub mod output;
+pub mod render;
+pub mod sampling;
+pub mod scene;
+pub mod stats;

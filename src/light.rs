@@ -1,0 +1,71 @@
+//! Area lights: choosing an emitter triangle by power, a uniform point on it, and the pdf of that
+//! choice with respect to solid angle at the receiving point.
+
+use crate::flat::{FlatScene, NOT_AN_EMITTER};
+use crate::geometry::{triangle_normal, triangle_point};
+use crate::sampling::sample_uniform_triangle;
+use glam::Vec3;
+
+/// A point on an emitter, chosen for next-event estimation.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    pub p: Vec3,
+    pub p_err: Vec3,
+    /// Unit normal of the emitting side, (v1 - v0) x (v2 - v0).
+    pub n: Vec3,
+    /// Emitted radiance toward the front.
+    pub le: Vec3,
+    /// The probability density of this point with respect to area: pmf(triangle) / area.
+    pub pdf_area: f32,
+}
+
+/// The row of the emitter table whose CDF interval holds `u` (binary search for the first row
+/// with cdf > u), so row k is chosen with probability pmf_k.
+#[inline]
+pub fn choose_emitter(scene: &FlatScene, u: f32) -> usize {
+    let (mut lo, mut hi) = (0usize, scene.emitters.len() - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if scene.emitters[mid].cdf > u {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
+}
+
+/// Chooses an emitter triangle in proportion to its power, then a point uniformly on its area.
+#[inline]
+pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> LightSample {
+    let row = scene.emitters[choose_emitter(scene, u_select)];
+    let tri = &scene.triangles[row.triangle as usize];
+    let (_, b1, b2) = sample_uniform_triangle(u1, u2);
+    let (p, p_err) = triangle_point(tri, b1, b2);
+    LightSample {
+        p,
+        p_err,
+        n: triangle_normal(tri),
+        le: Vec3::from(scene.materials[tri.material as usize].emission),
+        pdf_area: row.pmf / row.area,
+    }
+}
+
+/// The area density with which [`sample_emitter`] picks points on triangle `tri` (0 for a
+/// triangle that is not in the emitter table).
+#[inline]
+pub fn emitter_pdf_area(scene: &FlatScene, tri: u32) -> f32 {
+    let row = scene.triangles[tri as usize].emitter;
+    if row == NOT_AN_EMITTER {
+        return 0.0;
+    }
+    let e = &scene.emitters[row as usize];
+    e.pmf / e.area
+}
+
+/// Converts an area density at a light point to a solid-angle density at the receiver:
+/// p_ω = p_A · r² / |cos θ_l| (the Jacobian dA = r² dω / |cos θ_l|).
+#[inline]
+pub fn area_to_solid_angle(pdf_area: f32, dist2: f32, cos_light: f32) -> f32 {
+    pdf_area * dist2 / cos_light.abs()
+}

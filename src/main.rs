@@ -1,0 +1,278 @@
+//! The `hexray` command line: subcommands, defaults and exit codes. Everything else lives in
+//! the library.
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use hexray::camera::Camera;
+use hexray::film::Film;
+use hexray::flat::FlatScene;
+use hexray::output::{self, Metadata, RgbImage};
+use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
+use hexray::scene::Scene;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Exit status for bad input (scene or arguments), as clap uses for usage errors.
+const EXIT_BAD_INPUT: u8 = 2;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "hexray",
+    version,
+    about = "A physically based Monte Carlo path tracer (WGSL compute shader + CPU reference)",
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// `render` is the default subcommand: `hexray --backend cpu` renders the default scene.
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene to EXR (linear) + PNG (sRGB) [default].
+    Render(RenderArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendChoice {
+    /// The CPU reference renderer (rayon over tiles).
+    Cpu,
+    /// The WGSL compute-shader renderer (wgpu).
+    Gpu,
+}
+
+#[derive(Args, Debug, Clone)]
+struct RenderArgs {
+    /// Scene file (JSON).
+    #[arg(default_value = "scenes/tncg15_room.json")]
+    scene: PathBuf,
+    /// Which renderer to use.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Cpu)]
+    backend: BackendChoice,
+    /// Samples per pixel. Without --time the default is 64; with --time, no sample limit.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
+    #[arg(long, value_parser = parse_seconds)]
+    time: Option<f64>,
+    /// Seed of the random streams; renders with different seeds are independent.
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: u32,
+    /// Output EXR path; NAME.png (and NAME_var.exr with --variance) are written beside it.
+    /// Default: out/<scene name>.exr.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Also write the per-pixel variance of the mean as NAME_var.exr.
+    #[arg(long)]
+    variance: bool,
+    /// Exposure of the PNG in stops (the EXR is always linear and unscaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// CPU threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// No progress bar and no summary.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err("the time budget must be a positive number of seconds".into())
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let args = match cli.command {
+        Some(Command::Render(a)) => a,
+        None => cli.render,
+    };
+    match render(&args) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<ExitCode> {
+    // Everything that can be wrong with the input is found here, before any output exists.
+    let scene = match Scene::load(&args.scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    if args.backend == BackendChoice::Gpu {
+        eprintln!("error: the GPU backend is not built yet (issue 3); use --backend cpu for now");
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    let out = args.out.clone().unwrap_or_else(|| {
+        let name = if scene.desc.name.is_empty() {
+            args.scene
+                .file_stem()
+                .map_or("render".into(), |s| s.to_string_lossy().into_owned())
+        } else {
+            scene.desc.name.clone()
+        };
+        PathBuf::from("out").join(format!("{name}.exr"))
+    });
+    if out.extension().is_none_or(|e| e != "exr") {
+        eprintln!(
+            "error: --out {}: the output must be an .exr path (the PNG is written beside it)",
+            out.display()
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    let budget = Budget {
+        spp: args
+            .spp
+            .or(if args.time.is_none() { Some(64) } else { None }),
+        seconds: args.time,
+    };
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        |t| t as usize,
+    );
+
+    let flat = FlatScene::build(&scene);
+    let camera = Camera::new(&scene.desc.camera, args.width, args.height);
+    let mut backend = CpuBackend::new(&flat, camera, args.seed, threads)?;
+    if !args.quiet {
+        eprintln!(
+            "hexray: {} ({} triangles, {} spheres, {} emitters, {} BVH nodes) at {}x{} on {} ({})",
+            args.scene.display(),
+            flat.triangles.len(),
+            flat.spheres.len(),
+            flat.emitters.len(),
+            flat.nodes.len(),
+            args.width,
+            args.height,
+            backend.name(),
+            backend.device()
+        );
+    }
+
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // Ctrl-C ends the render after the current pass; a second Ctrl-C exits at once.
+        ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        })
+        .context("installing the Ctrl-C handler")?;
+    }
+    let progress = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let bar = match budget.spp {
+            Some(n) => indicatif::ProgressBar::new(n as u64),
+            None => indicatif::ProgressBar::new((budget.seconds.unwrap() * 1000.0) as u64),
+        };
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} {msg} [{elapsed_precise}]",
+            )
+            .unwrap(),
+        );
+        bar
+    });
+    let mut film = Film::new(args.width, args.height);
+    let report = render_progressive(&mut backend, &mut film, budget, &stop, |spp, secs| {
+        if let Some(bar) = &progress {
+            match budget.spp {
+                Some(_) => bar.set_position(spp as u64),
+                None => bar.set_position((secs * 1000.0) as u64),
+            }
+            bar.set_message(format!("spp {spp}"));
+        }
+    })?;
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+
+    let mut meta = Metadata::default();
+    meta.set("spp", report.spp);
+    meta.set("seed", args.seed);
+    meta.set("backend", backend.name());
+    meta.set("device", backend.device());
+    meta.set("render_seconds", format!("{:.6}", report.seconds));
+    meta.set("scene", args.scene.display());
+    meta.set("scene_name", &scene.desc.name);
+    meta.set("scene_sha1", &scene.sha1);
+    meta.set("hexray_version", env!("CARGO_PKG_VERSION"));
+    meta.set("dropped_samples", film.dropped());
+    meta.set("width", args.width);
+    meta.set("height", args.height);
+    write_outputs(&out, &film, &meta, args)?;
+
+    if !args.quiet {
+        let (mean, se) = film.image_mean();
+        let paths = report.spp as f64 * args.width as f64 * args.height as f64;
+        let why = match report.reason {
+            StopReason::SampleCount => "sample count reached",
+            StopReason::TimeBudget => "time budget reached",
+            StopReason::Interrupted => "interrupted; samples so far kept",
+        };
+        eprintln!(
+            "rendered {} spp in {:.2} s ({:.3} M camera paths/s; {why}); dropped {} samples",
+            report.spp,
+            report.seconds,
+            paths / report.seconds / 1e6,
+            film.dropped()
+        );
+        eprintln!(
+            "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
+            mean[0], mean[1], mean[2], se[0], se[1], se[2]
+        );
+        let (exr, png, var) = output::output_paths(&out);
+        eprintln!("wrote {} and {}", exr.display(), png.display());
+        if args.variance {
+            eprintln!("wrote {}", var.display());
+        }
+    }
+    Ok(if report.reason == StopReason::Interrupted {
+        ExitCode::from(130)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn write_outputs(out: &Path, film: &Film, meta: &Metadata, args: &RenderArgs) -> Result<()> {
+    let (exr, png, var) = output::output_paths(out);
+    let image = RgbImage {
+        width: film.width as usize,
+        height: film.height as usize,
+        pixels: film.mean_image(),
+    };
+    output::write_exr(&exr, &image, meta)?;
+    output::write_png(&png, &image, args.exposure)?;
+    if args.variance {
+        let v = RgbImage {
+            pixels: film.variance_image(),
+            ..image
+        };
+        let mut vmeta = meta.clone();
+        vmeta.set("content", "variance of the pixel mean");
+        output::write_exr(&var, &v, &vmeta)?;
+    }
+    Ok(())
+}

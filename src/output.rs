@@ -1,0 +1,196 @@
+//! Image files: linear float EXR with the render's metadata, an sRGB PNG for people, and the
+//! variance of the mean as a second EXR. Every file is written to a temporary name in the same
+//! directory and renamed into place, so a reader never sees half a file and an interrupted
+//! write leaves the previous file intact.
+
+use anyhow::{bail, Context, Result};
+use exr::prelude::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// What a render file records about how it was made.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Metadata {
+    /// Ordered key/value pairs, written as EXR string attributes named `hexray:<key>`.
+    pub fields: BTreeMap<String, String>,
+}
+
+impl Metadata {
+    pub fn set(&mut self, key: &str, value: impl ToString) {
+        self.fields.insert(key.to_string(), value.to_string());
+    }
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.fields.get(key).map(String::as_str)
+    }
+}
+
+/// A linear RGB image in memory, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// The three paths written for `--out DIR/NAME.exr`: the EXR, `NAME.png` and `NAME_var.exr`.
+pub fn output_paths(out: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "render".into());
+    let dir = out.parent().unwrap_or(Path::new(""));
+    (
+        dir.join(format!("{stem}.exr")),
+        dir.join(format!("{stem}.png")),
+        dir.join(format!("{stem}_var.exr")),
+    )
+}
+
+/// Writes `bytes_of(tmp)` with `write` and renames it over `path`.
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Some(d) = dir {
+        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    let name = path
+        .file_name()
+        .with_context(|| format!("{} is not a file path", path.display()))?;
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = write(&tmp).and_then(|_| {
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes a linear float RGB EXR (32-bit float channels, lossless ZIP) with the metadata as
+/// string attributes.
+pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {
+    write_atomically(path, |tmp| {
+        let (w, h) = (image.width, image.height);
+        let pixels = &image.pixels;
+        let channels = SpecificChannels::rgb(|p: Vec2<usize>| -> (f32, f32, f32) {
+            let [r, g, b] = pixels[p.y() * w + p.x()];
+            (r, g, b)
+        });
+        let mut attrs = LayerAttributes::named("hexray");
+        attrs.software_name = Some(Text::from(concat!("hexray ", env!("CARGO_PKG_VERSION"))));
+        for (k, v) in &meta.fields {
+            attrs.other.insert(
+                Text::from(format!("hexray:{k}").as_str()),
+                exr::meta::attribute::AttributeValue::Text(Text::from(v.as_str())),
+            );
+        }
+        let layer = Layer::new((w, h), attrs, Encoding::SMALL_LOSSLESS, channels);
+        Image::from_layer(layer)
+            .write()
+            .to_file(tmp)
+            .with_context(|| format!("writing {}", tmp.display()))
+    })
+}
+
+/// Reads the first RGB(A) layer of an EXR and its `hexray:` metadata.
+pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| RgbImage {
+            width: res.width(),
+            height: res.height(),
+            pixels: vec![[0.0; 3]; res.width() * res.height()],
+        },
+        |img: &mut RgbImage, p: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[p.y() * w + p.x()] = [r, g, b];
+        },
+    )
+    .with_context(|| format!("reading {}", path.display()))?;
+    let mut meta = Metadata::default();
+    for (k, v) in &image.layer_data.attributes.other {
+        let key = k.to_string();
+        if let (Some(key), exr::meta::attribute::AttributeValue::Text(t)) =
+            (key.strip_prefix("hexray:"), v)
+        {
+            meta.set(key, t.to_string());
+        }
+    }
+    Ok((image.layer_data.channel_data.pixels, meta))
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) on a linear value in [0, 1].
+fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Writes an 8-bit sRGB PNG for people: linear radiance times 2^exposure, clamped to [0, 1],
+/// then sRGB-encoded. The only tone mapping in hexray, and only here.
+pub fn write_png(path: &Path, image: &RgbImage, exposure: f32) -> Result<()> {
+    if image.width == 0 || image.height == 0 {
+        bail!("empty image");
+    }
+    let scale = exposure.exp2();
+    let bytes: Vec<u8> = image
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|c| (srgb_encode((c * scale).clamp(0.0, 1.0)) * 255.0 + 0.5) as u8))
+        .collect();
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            image.width as u32,
+            image.height as u32,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .with_context(|| format!("writing {}", tmp.display()))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trips_pixels_and_metadata() {
+        let dir = std::env::temp_dir().join(format!("hexray-exr-{}", std::process::id()));
+        let path = dir.join("a.exr");
+        let image = RgbImage {
+            width: 3,
+            height: 2,
+            pixels: (0..6).map(|i| [i as f32, 0.5, 1e-7 * i as f32]).collect(),
+        };
+        let mut meta = Metadata::default();
+        meta.set("spp", 64);
+        meta.set("scene_sha1", "abc");
+        write_exr(&path, &image, &meta).unwrap();
+        let (back, back_meta) = read_exr(&path).unwrap();
+        assert_eq!(back, image);
+        assert_eq!(back_meta, meta);
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+            .collect();
+        assert!(leftovers.is_empty());
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn output_paths_follow_the_exr_name() {
+        let (e, p, v) = output_paths(Path::new("out/room.exr"));
+        assert_eq!(e, Path::new("out/room.exr"));
+        assert_eq!(p, Path::new("out/room.png"));
+        assert_eq!(v, Path::new("out/room_var.exr"));
+    }
+}

@@ -1,0 +1,143 @@
+//! Progressive rendering, common to both backends: passes of a few samples per pixel until the
+//! sample count or the time budget is reached, or the user stops it; the samples taken so far
+//! are kept in every case.
+
+use crate::film::Film;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Something that can add samples `first..first + count` of every pixel to a film.
+pub trait Backend {
+    /// A short name for logs and metadata ("cpu", "gpu").
+    fn name(&self) -> &'static str;
+    /// The device it runs on, for logs and metadata.
+    fn device(&self) -> String;
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()>;
+}
+
+/// When to stop: after `spp` samples per pixel, after `seconds`, whichever comes first (at least
+/// one of them is set).
+#[derive(Clone, Copy, Debug)]
+pub struct Budget {
+    pub spp: Option<u32>,
+    pub seconds: Option<f64>,
+}
+
+/// Why a render ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    SampleCount,
+    TimeBudget,
+    Interrupted,
+}
+
+/// What a progressive render did.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderReport {
+    pub spp: u32,
+    pub seconds: f64,
+    pub reason: StopReason,
+}
+
+/// A pass aims at this duration, so that Ctrl-C and a time budget take effect promptly.
+const TARGET_PASS_SECONDS: f64 = 0.25;
+
+/// Runs passes until the budget is spent or `stop` is set. `on_pass(spp_done, elapsed)` is
+/// called after each pass (progress bars, curves).
+pub fn render_progressive(
+    backend: &mut dyn Backend,
+    film: &mut Film,
+    budget: Budget,
+    stop: &AtomicBool,
+    mut on_pass: impl FnMut(u32, f64),
+) -> anyhow::Result<RenderReport> {
+    assert!(budget.spp.is_some() || budget.seconds.is_some());
+    let start = Instant::now();
+    let mut done = film.spp() as u32;
+    let target = budget.spp.map(|s| done + s);
+    let mut per_spp = None::<f64>;
+    let reason = loop {
+        if stop.load(Ordering::SeqCst) {
+            break StopReason::Interrupted;
+        }
+        let elapsed = start.elapsed().as_secs_f64();
+        if target.is_some_and(|t| done >= t) {
+            break StopReason::SampleCount;
+        }
+        if budget.seconds.is_some_and(|s| elapsed >= s) {
+            break StopReason::TimeBudget;
+        }
+        // Size the pass from the measured cost of a sample per pixel: one sample first, then
+        // as many as fit in the target duration and in what remains of the budget.
+        let mut count = match per_spp {
+            None => 1,
+            Some(c) => {
+                let mut secs = TARGET_PASS_SECONDS;
+                if let Some(s) = budget.seconds {
+                    secs = secs.min(s - elapsed);
+                }
+                ((secs / c).floor() as u32).max(1)
+            }
+        };
+        if let Some(t) = target {
+            count = count.min(t - done);
+        }
+        let t0 = Instant::now();
+        backend.pass(done, count, film)?;
+        let dt = t0.elapsed().as_secs_f64();
+        // The first pass includes warm-up (thread pool start, shader compilation): measure
+        // the cost again on every pass and keep the latest.
+        per_spp = Some(dt / count as f64);
+        done += count;
+        on_pass(done, start.elapsed().as_secs_f64());
+    };
+    Ok(RenderReport {
+        spp: done,
+        seconds: start.elapsed().as_secs_f64(),
+        reason,
+    })
+}
+
+/// The CPU backend as a [`Backend`], on a rayon pool of its own.
+pub struct CpuBackend<'a> {
+    pub scene: &'a crate::flat::FlatScene,
+    pub camera: crate::camera::Camera,
+    pub seed: u32,
+    pub faults: crate::cpu::Faults,
+    pub pool: rayon::ThreadPool,
+}
+
+impl<'a> CpuBackend<'a> {
+    pub fn new(
+        scene: &'a crate::flat::FlatScene,
+        camera: crate::camera::Camera,
+        seed: u32,
+        threads: usize,
+    ) -> anyhow::Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        Ok(Self {
+            scene,
+            camera,
+            seed,
+            faults: crate::cpu::Faults::NONE,
+            pool,
+        })
+    }
+}
+
+impl Backend for CpuBackend<'_> {
+    fn name(&self) -> &'static str {
+        "cpu"
+    }
+    fn device(&self) -> String {
+        format!("{} threads", self.pool.current_num_threads())
+    }
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+        let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
+        self.pool
+            .install(|| crate::cpu::render_pass(scene, camera, seed, first, count, faults, film));
+        Ok(())
+    }
+}

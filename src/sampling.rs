@@ -1,0 +1,176 @@
+//! Random numbers and the warps that turn them into directions and points.
+//!
+//! Every random number is a pure function of (seed, pixel, sample index, dimension): a
+//! counter-based hash, not a stateful generator. So an image does not depend on how pixels are
+//! scheduled over threads, and `shaders/sampling.wgsl` draws the very same numbers bit for bit
+//! (only 32-bit integer multiply, add, xor and shift are used, which WGSL defines exactly).
+//!
+//! The hash is `pcg4d` from Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 9(3),
+//! 2020: a 4-in/4-out permutation of u32 vectors with good avalanche on every input lane. One call
+//! gives four numbers, so a *dimension* here names a block of four: block 0 is the camera, and
+//! bounce `k` uses blocks `1 + 2k` (light sampling and roulette) and `2 + 2k` (BSDF sampling).
+
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// `pcg4d`: one round of an LCG on each lane, then two rounds of lane mixing around a xorshift.
+#[inline]
+pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
+    let mut v = v.map(|x| x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223));
+    v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
+    v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+    v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+    v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
+    v = v.map(|x| x ^ (x >> 16));
+    v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
+    v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+    v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+    v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
+    v
+}
+
+/// The top 24 bits as a float in [0, 1): every value is exactly representable in f32, so the
+/// conversion is exact on any backend.
+#[inline]
+pub fn u32_to_unit_f32(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Dimension blocks, named so the integrator and the shader say which numbers they use.
+pub const DIM_CAMERA: u32 = 0;
+/// First block of bounce `k`: emitter choice, point on the emitter (2), Russian roulette.
+#[inline]
+pub fn dim_light(bounce: u32) -> u32 {
+    1 + 2 * bounce
+}
+/// Second block of bounce `k`: BSDF direction (2), lobe choice (reflect or refract), unused.
+#[inline]
+pub fn dim_bsdf(bounce: u32) -> u32 {
+    2 + 2 * bounce
+}
+
+/// The random stream of one camera sample: (seed, pixel, sample index) fixed, the dimension
+/// block chosen per draw.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    pub seed: u32,
+    pub pixel: u32,
+    pub sample: u32,
+}
+
+impl Sampler {
+    pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
+        Self {
+            seed,
+            pixel,
+            sample,
+        }
+    }
+
+    /// Four uniform numbers in [0, 1) for dimension block `dim`.
+    #[inline]
+    pub fn draw4(&self, dim: u32) -> [f32; 4] {
+        pcg4d([self.pixel, self.sample, dim, self.seed]).map(u32_to_unit_f32)
+    }
+}
+
+/// Cosine-weighted direction about +z (Malley's method: a uniform point on the unit disk, lifted
+/// to the hemisphere); pdf = cos(theta) / pi with respect to solid angle.
+#[inline]
+pub fn sample_cosine_hemisphere(u1: f32, u2: f32) -> Vec3 {
+    let r = u1.sqrt();
+    let phi = 2.0 * PI * u2;
+    let x = r * phi.cos();
+    let y = r * phi.sin();
+    let z = (1.0 - u1).max(0.0).sqrt();
+    Vec3::new(x, y, z)
+}
+
+/// Uniform point on a triangle as barycentrics (b0, b1, b2): the square-root warp,
+/// pdf = 1 / area with respect to area.
+#[inline]
+pub fn sample_uniform_triangle(u1: f32, u2: f32) -> (f32, f32, f32) {
+    let su = u1.sqrt();
+    let b1 = su * (1.0 - u2);
+    let b2 = su * u2;
+    (1.0 - b1 - b2, b1, b2)
+}
+
+/// An orthonormal basis (t, b) around a unit normal n: Duff et al., "Building an Orthonormal
+/// Basis, Revisited", JCGT 6(1), 2017 (branchless, no singularity).
+#[inline]
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    (t, bt)
+}
+
+/// The power heuristic with beta = 2 (Veach's thesis, eq. 9.13), for one sample from each of
+/// two strategies: the weight of the strategy with pdf `pdf_f` against the one with `pdf_g`.
+#[inline]
+pub fn power_heuristic(pdf_f: f32, pdf_g: f32) -> f32 {
+    let f2 = pdf_f * pdf_f;
+    let g2 = pdf_g * pdf_g;
+    if f2 + g2 > 0.0 {
+        f2 / (f2 + g2)
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_floats_lie_in_the_half_open_interval() {
+        assert_eq!(u32_to_unit_f32(0), 0.0);
+        assert!(u32_to_unit_f32(u32::MAX) < 1.0);
+    }
+
+    #[test]
+    fn streams_differ_in_every_key() {
+        let base = Sampler::new(1, 2, 3).draw4(4);
+        assert_ne!(base, Sampler::new(9, 2, 3).draw4(4));
+        assert_ne!(base, Sampler::new(1, 9, 3).draw4(4));
+        assert_ne!(base, Sampler::new(1, 2, 9).draw4(4));
+        assert_ne!(base, Sampler::new(1, 2, 3).draw4(9));
+    }
+
+    /// The mean of N uniform numbers has standard error 1/sqrt(12 N); a lane that is off by
+    /// more than 5 s.e. is not uniform (p < 6e-7 per lane for a correct hash).
+    #[test]
+    fn every_lane_has_mean_one_half() {
+        let n = 200_000u32;
+        let mut sums = [0.0f64; 4];
+        for i in 0..n {
+            let u = Sampler::new(7, i % 4096, i / 4096).draw4(3);
+            for k in 0..4 {
+                sums[k] += u[k] as f64;
+            }
+        }
+        let se = (1.0 / (12.0 * n as f64)).sqrt();
+        for s in sums {
+            let z = (s / n as f64 - 0.5) / se;
+            assert!(z.abs() < 5.0, "lane mean off by {z} s.e.");
+        }
+    }
+
+    #[test]
+    fn orthonormal_basis_is_orthonormal() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.4, 0.866).normalize(),
+        ] {
+            let (t, b) = orthonormal_basis(n);
+            assert!((t.length() - 1.0).abs() < 1e-6);
+            assert!((b.length() - 1.0).abs() < 1e-6);
+            assert!(t.dot(b).abs() < 1e-6 && t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! Scenes: the JSON format, its validation, and errors that say where and what to do.
+
+pub mod format;
+pub mod locate;
+pub mod validate;
+
+pub use format::{BoxDesc, CameraDesc, MaterialDesc, SceneDesc, SphereDesc, TriangleDesc};
+pub use locate::JsonPath;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A scene that parsed and passed validation: everything the renderer needs, plus what the
+/// outputs record about where it came from.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub desc: SceneDesc,
+    /// The file it was read from (for messages and metadata).
+    pub path: PathBuf,
+    /// SHA-1 of the file's bytes, recorded in every output so renders can be matched to scenes.
+    pub sha1: String,
+}
+
+/// Why a scene cannot be rendered, with the file, the place in it, and what to do.
+#[derive(Debug, Clone)]
+pub struct SceneError {
+    pub file: PathBuf,
+    /// 1-based line and column, when known.
+    pub line_col: Option<(usize, usize)>,
+    /// The path of the offending value, e.g. `triangles[12].v[1]`; empty for the whole file.
+    pub path: String,
+    pub message: String,
+    /// What the user can do about it.
+    pub help: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some((l, c)) = self.line_col {
+            write!(f, ":{l}:{c}")?;
+        }
+        write!(f, ": ")?;
+        if !self.path.is_empty() {
+            write!(f, "{}: ", self.path)?;
+        }
+        write!(f, "{}", self.message)?;
+        if !self.help.is_empty() {
+            write!(f, "\n  help: {}", self.help)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+impl Scene {
+    /// Reads, parses and validates a scene file. Nothing is rendered or written here, so a bad
+    /// scene is reported before any output exists.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.to_path_buf(),
+            line_col: None,
+            path: String::new(),
+            message: format!("cannot read the scene file: {e}"),
+            help: "check the path; the default scene is scenes/tncg15_room.json".into(),
+        })?;
+        Self::from_json(&text, path)
+    }
+
+    /// Parses and validates scene JSON; `path` is only used in messages and metadata.
+    pub fn from_json(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
+            let inner = e.inner();
+            let line_col = (inner.line() > 0).then(|| (inner.line(), inner.column()));
+            let json_path = e.path().to_string();
+            let msg = inner.to_string();
+            // serde_json appends " at line L column C"; the location is already in front.
+            let msg = msg
+                .rsplit_once(" at line ")
+                .map_or(msg.as_str(), |(m, _)| m)
+                .to_string();
+            SceneError {
+                file: path.to_path_buf(),
+                line_col,
+                path: if json_path == "." {
+                    String::new()
+                } else {
+                    json_path
+                },
+                help: parse_help(&msg),
+                message: msg,
+            }
+        })?;
+        validate::validate(&desc).map_err(|issue| SceneError {
+            file: path.to_path_buf(),
+            line_col: locate::locate(text, &issue.path),
+            path: issue.path.to_string(),
+            message: issue.message,
+            help: issue.help,
+        })?;
+        Ok(Scene {
+            desc,
+            path: path.to_path_buf(),
+            sha1: sha1_smol::Sha1::from(text.as_bytes()).digest().to_string(),
+        })
+    }
+}
+
+fn parse_help(msg: &str) -> String {
+    if msg.starts_with("unknown field") {
+        "remove the field or fix its spelling; the fields this object takes are listed above".into()
+    } else if msg.starts_with("unknown variant") {
+        "material `type` must be one of diffuse, mirror, glass, emitter".into()
+    } else if msg.starts_with("missing field") {
+        "add the field; the scene format is documented in src/scene/format.rs".into()
+    } else if msg.contains("invalid type") || msg.contains("invalid length") {
+        "numbers are JSON numbers and points are [x, y, z]".into()
+    } else {
+        "fix the JSON syntax at this place".into()
+    }
+}
