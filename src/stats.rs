@@ -93,6 +93,9 @@ pub fn normal_two_sided_p(z: f64) -> f64 {
 
 /// Upper tail of the chi-square distribution with `dof` degrees of freedom: Q(dof/2, x/2).
 pub fn chi_square_upper_p(x: f64, dof: f64) -> f64 {
+    if x <= 0.0 || dof <= 0.0 {
+        return 1.0;
+    }
     gamma_ur(dof / 2.0, x / 2.0)
 }
 

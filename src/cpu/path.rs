@@ -33,13 +33,16 @@ pub const RR_MAX_SURVIVAL: f32 = 0.95;
 /// renderer. The production path uses `Faults::NONE`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Faults {
-    /// Multiplies every mirror and glass reflection (1 when correct).
+    /// Multiplies the throughput at every mirror and glass bounce (1 when correct).
     pub specular_scale: f32,
+    /// Ends every path after this many bounces (`u32::MAX` when correct: no maximum depth).
+    pub max_bounces: u32,
 }
 
 impl Faults {
     pub const NONE: Faults = Faults {
         specular_scale: 1.0,
+        max_bounces: u32::MAX,
     };
 }
 
@@ -162,6 +165,9 @@ pub fn trace_path(
             throughput /= q;
         }
         bounce += 1;
+        if bounce >= faults.max_bounces {
+            break;
+        }
     }
     radiance
 }

@@ -73,22 +73,40 @@ impl Scene {
         let de = &mut serde_json::Deserializer::from_str(text);
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let inner = e.inner();
-            let line_col = (inner.line() > 0).then(|| (inner.line(), inner.column()));
-            let json_path = e.path().to_string();
+            let mut line_col = (inner.line() > 0).then(|| (inner.line(), inner.column()));
+            let mut json_path = JsonPath::root();
+            for seg in e.path().iter() {
+                json_path = match seg {
+                    serde_path_to_error::Segment::Seq { index } => json_path.index(*index),
+                    serde_path_to_error::Segment::Map { key } => json_path.key(key),
+                    serde_path_to_error::Segment::Enum { variant } => json_path.key(variant),
+                    serde_path_to_error::Segment::Unknown => json_path,
+                };
+            }
             let msg = inner.to_string();
             // serde_json appends " at line L column C"; the location is already in front.
             let msg = msg
                 .rsplit_once(" at line ")
                 .map_or(msg.as_str(), |(m, _)| m)
                 .to_string();
+            // Inside a material (an internally tagged enum) serde reports an unknown field at the
+            // end of the object; point at the field itself.
+            if let Some(field) = msg
+                .strip_prefix("unknown field `")
+                .and_then(|m| m.split('`').next())
+            {
+                let with_field = json_path.key(field);
+                if json_path.0.last() != with_field.0.last() {
+                    if let Some(lc) = locate::locate(text, &with_field) {
+                        json_path = with_field;
+                        line_col = Some(lc);
+                    }
+                }
+            }
             SceneError {
                 file: path.to_path_buf(),
                 line_col,
-                path: if json_path == "." {
-                    String::new()
-                } else {
-                    json_path
-                },
+                path: json_path.to_string(),
                 help: parse_help(&msg),
                 message: msg,
             }

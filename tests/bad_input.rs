@@ -1,0 +1,301 @@
+//! Bad input is refused before anything is rendered: each broken scene gives its own error,
+//! naming the file, the line:column and the JSON path of the problem and saying what to do; the
+//! exit status is 2; no output file is created, and an existing one is not touched.
+
+mod common;
+use common::repo;
+use serde_json::{json, Value};
+use std::path::Path;
+use std::process::{Command, Output};
+
+struct Case {
+    name: &'static str,
+    /// The base scene and how to break it.
+    base: &'static str,
+    edit: fn(&mut Value),
+    /// The JSON path the error must name.
+    path: &'static str,
+    /// Words the message must contain.
+    message: &'static str,
+    /// Text that must be on the line the error points to (None: no line check).
+    on_line: Option<&'static str>,
+}
+
+const ROOM: &str = "scenes/tncg15_room.json";
+const GLASS: &str = "scenes/glass_room.json";
+
+fn cases() -> Vec<Case> {
+    vec![
+        Case {
+            name: "misspelt material name",
+            base: ROOM,
+            edit: |s| s["triangles"][3]["material"] = json!("rde"),
+            path: "triangles[3].material",
+            message: "unknown material `rde`",
+            on_line: Some("\"rde\""),
+        },
+        Case {
+            name: "unknown material type",
+            base: ROOM,
+            edit: |s| s["materials"]["red"]["type"] = json!("difuse"),
+            path: "materials.red.type",
+            message: "unknown variant `difuse`",
+            on_line: Some("difuse"),
+        },
+        Case {
+            name: "field of another material type",
+            base: ROOM,
+            edit: |s| s["materials"]["mirror"]["albedo"] = json!([0.5, 0.5, 0.5]),
+            path: "materials.mirror.albedo",
+            message: "unknown field `albedo`",
+            on_line: Some("\"albedo\""),
+        },
+        Case {
+            name: "emitting sphere",
+            base: ROOM,
+            edit: |s| s["spheres"][0]["material"] = json!("light"),
+            path: "spheres[0].material",
+            message: "a sphere cannot emit",
+            on_line: Some("\"light\""),
+        },
+        Case {
+            name: "number beyond f32",
+            base: ROOM,
+            edit: |s| s["triangles"][12]["v"][1][2] = json!(1e39),
+            path: "triangles[12].v[1][2]",
+            message: "not a finite 32-bit float",
+            on_line: Some("e+39"),
+        },
+        Case {
+            name: "zero-area triangle",
+            base: ROOM,
+            edit: |s| s["triangles"][5]["v"][2] = s["triangles"][5]["v"][0].clone(),
+            path: "triangles[5].v",
+            message: "zero area",
+            on_line: Some("\"v\""),
+        },
+        Case {
+            name: "zero radius",
+            base: ROOM,
+            edit: |s| s["spheres"][0]["radius"] = json!(0.0),
+            path: "spheres[0].radius",
+            message: "radius 0 is not > 0",
+            on_line: Some("\"radius\""),
+        },
+        Case {
+            name: "negative index of refraction",
+            base: GLASS,
+            edit: |s| s["materials"]["glass_clear"]["ior"] = json!(-1.5),
+            path: "materials.glass_clear.ior",
+            message: "index of refraction -1.5",
+            on_line: Some("-1.5"),
+        },
+        Case {
+            name: "albedo above 1",
+            base: ROOM,
+            edit: |s| s["materials"]["red"]["albedo"][0] = json!(1.5),
+            path: "materials.red.albedo[0]",
+            message: "albedo 1.5 is outside [0, 1]",
+            on_line: Some("1.5"),
+        },
+        Case {
+            name: "negative reflectance",
+            base: ROOM,
+            edit: |s| s["materials"]["mirror"]["reflectance"][1] = json!(-0.1),
+            path: "materials.mirror.reflectance[1]",
+            message: "reflectance -0.1 is outside [0, 1]",
+            on_line: Some("-0.1"),
+        },
+        Case {
+            name: "no emitter",
+            base: ROOM,
+            edit: |s| {
+                for t in s["triangles"].as_array_mut().unwrap() {
+                    if t["material"] == "light" {
+                        t["material"] = json!("white");
+                    }
+                }
+            },
+            path: "triangles",
+            message: "no emitter",
+            on_line: Some("\"triangles\""),
+        },
+        Case {
+            name: "up parallel to the view",
+            base: ROOM,
+            edit: |s| s["camera"]["up"] = json!([2, 0, 0]),
+            path: "camera.up",
+            message: "parallel to the view",
+            on_line: Some("\"up\""),
+        },
+        Case {
+            name: "field of view of 180 degrees",
+            base: ROOM,
+            edit: |s| s["camera"]["vfov_deg"] = json!(180.0),
+            path: "camera.vfov_deg",
+            message: "outside (0, 180)",
+            on_line: Some("180"),
+        },
+        Case {
+            name: "field of view of 0 degrees",
+            base: ROOM,
+            edit: |s| s["camera"]["vfov_deg"] = json!(0.0),
+            path: "camera.vfov_deg",
+            message: "outside (0, 180)",
+            on_line: Some("\"vfov_deg\""),
+        },
+        Case {
+            name: "misspelt field",
+            base: ROOM,
+            edit: |s| s["triangles"][0]["colour"] = json!("red"),
+            path: "triangles[0].colour",
+            message: "unknown field `colour`",
+            on_line: Some("colour"),
+        },
+        Case {
+            name: "missing field",
+            base: ROOM,
+            edit: |s| {
+                s["camera"].as_object_mut().unwrap().remove("eye");
+            },
+            path: "camera",
+            message: "missing field `eye`",
+            on_line: None,
+        },
+        Case {
+            name: "two-sided emitter",
+            base: ROOM,
+            edit: |s| s["materials"]["light"]["one_sided"] = json!(false),
+            path: "materials.light.one_sided",
+            message: "two-sided emitters are not modelled",
+            on_line: Some("false"),
+        },
+    ]
+}
+
+fn hexray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hexray"))
+        .args(args)
+        .output()
+        .expect("running hexray")
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("hexray-bad-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs hexray on `scene_text` with outputs in an empty folder that holds one old PNG; checks the
+/// exit status, that the old PNG is untouched and that nothing else appeared. Returns stderr.
+fn run_refused(tag: &str, scene_text: &str) -> (String, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let file = dir.join("scene.json");
+    std::fs::write(&file, scene_text).unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("x.png"), b"old").unwrap();
+    let exr = out.join("x.exr");
+    let o = hexray(&[
+        "render",
+        file.to_str().unwrap(),
+        "--out",
+        exr.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{tag}: exit status; stderr:\n{stderr}");
+    let files: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(files, vec![std::ffi::OsString::from("x.png")], "{tag}: outputs appeared");
+    assert_eq!(std::fs::read(out.join("x.png")).unwrap(), b"old", "{tag}: old output touched");
+    (stderr, file)
+}
+
+#[test]
+fn every_broken_scene_gets_its_own_located_error_and_exit_2() {
+    for case in cases() {
+        let mut scene: Value =
+            serde_json::from_str(&std::fs::read_to_string(repo(case.base)).unwrap()).unwrap();
+        (case.edit)(&mut scene);
+        let text = serde_json::to_string_pretty(&scene).unwrap();
+        let (stderr, file) = run_refused(&case.name.replace(' ', "_"), &text);
+
+        // "error: FILE:LINE:COL: PATH: MESSAGE" then "  help: ..."
+        let first = stderr.lines().next().unwrap_or("");
+        let prefix = format!("error: {}:", file.display());
+        assert!(first.starts_with(&prefix), "{}: {first}", case.name);
+        let rest = &first[prefix.len()..];
+        let mut parts = rest.splitn(3, ':');
+        let line: usize = parts.next().unwrap().parse().unwrap_or_else(|_| panic!("{}: no line in {first}", case.name));
+        let col: usize = parts.next().unwrap().trim().parse().unwrap_or_else(|_| panic!("{}: no column in {first}", case.name));
+        let tail = parts.next().unwrap().trim_start();
+        assert!(tail.starts_with(&format!("{}: ", case.path)), "{}: path in {first}", case.name);
+        assert!(first.contains(case.message), "{}: message in {first}", case.name);
+        assert!(stderr.contains("help: "), "{}: no help in {stderr}", case.name);
+        if let Some(token) = case.on_line {
+            let text_line = text.lines().nth(line - 1).unwrap_or("");
+            assert!(
+                text_line.contains(token),
+                "{}: line {line} is `{text_line}`, expected it to contain `{token}`",
+                case.name
+            );
+            assert!(col >= 1 && col <= text_line.chars().count() + 1, "{}: column {col}", case.name);
+        }
+    }
+}
+
+#[test]
+fn a_misspelt_material_suggests_the_closest_name() {
+    let mut scene: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo(ROOM)).unwrap()).unwrap();
+    scene["triangles"][0]["material"] = json!("magneta");
+    let (stderr, _) = run_refused("suggest", &serde_json::to_string_pretty(&scene).unwrap());
+    assert!(stderr.contains("did you mean `magenta`?"), "{stderr}");
+}
+
+#[test]
+fn a_json_syntax_error_points_at_the_place() {
+    let text = std::fs::read_to_string(repo(ROOM)).unwrap();
+    let broken = text.replacen("\"vfov_deg\": 90.0,", "\"vfov_deg\": 90.0,,", 1);
+    let (stderr, file) = run_refused("syntax", &broken);
+    let line_no = broken.lines().position(|l| l.contains("90.0,,")).unwrap() + 1;
+    assert!(stderr.contains(&format!("{}:{line_no}:", file.display())), "{stderr}");
+}
+
+#[test]
+fn a_missing_scene_file_is_a_clear_error() {
+    let (stderr, _) = {
+        let dir = temp_dir("missing");
+        let o = hexray(&["render", dir.join("nope.json").to_str().unwrap(), "--out", dir.join("x.exr").to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        (String::from_utf8_lossy(&o.stderr).into_owned(), ())
+    };
+    assert!(stderr.contains("nope.json") && stderr.contains("cannot read"), "{stderr}");
+}
+
+#[test]
+fn bad_arguments_exit_2_before_rendering() {
+    let dir = temp_dir("args");
+    let exr = dir.join("x.exr");
+    let scene = repo(ROOM);
+    for args in [
+        vec!["--spp", "0"],
+        vec!["--time", "-1"],
+        vec!["--width", "0"],
+        vec!["--backend", "quantum"],
+        vec!["--out", "x.png"],
+    ] {
+        let mut all = vec!["render", scene.to_str().unwrap(), "--out", exr.to_str().unwrap()];
+        all.extend(args.iter());
+        let o = hexray(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(!Path::new(&exr).exists() && !Path::new("x.png").exists());
+    }
+}

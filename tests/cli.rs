@@ -1,0 +1,115 @@
+//! The command line as a user meets it: `render` (the default subcommand) writes a linear EXR
+//! with its metadata, an sRGB PNG and, on request, the variance EXR; a time budget and Ctrl-C
+//! both end the render with the samples taken so far written out.
+
+mod common;
+use common::repo;
+use hexray::output::read_exr;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn hexray() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_hexray"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hexray-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn render_writes_exr_png_and_variance_with_metadata() {
+    let dir = temp_dir("render");
+    let exr = dir.join("cb.exr");
+    let o = hexray()
+        .args(["render", "scenes/cornell_box.json", "--backend", "cpu", "--spp", "3"])
+        .args(["--width", "16", "--height", "12", "--seed", "42", "--variance", "--quiet"])
+        .arg("--out")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (image, meta) = read_exr(&exr).unwrap();
+    assert_eq!((image.width, image.height), (16, 12));
+    let text = std::fs::read(repo("scenes/cornell_box.json")).unwrap();
+    let sha1 = sha1_smol::Sha1::from(&text[..]).digest().to_string();
+    for (k, v) in [
+        ("spp", "3"),
+        ("seed", "42"),
+        ("backend", "cpu"),
+        ("scene_sha1", sha1.as_str()),
+        ("hexray_version", env!("CARGO_PKG_VERSION")),
+        ("dropped_samples", "0"),
+    ] {
+        assert_eq!(meta.get(k), Some(v), "metadata {k}");
+    }
+    let secs: f64 = meta.get("render_seconds").unwrap().parse().unwrap();
+    assert!(secs > 0.0);
+    let (var, _) = read_exr(&dir.join("cb_var.exr")).unwrap();
+    assert!(var.pixels.iter().all(|p| p.iter().all(|&v| v >= 0.0 && v.is_finite())));
+    let png = image::open(dir.join("cb.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (16, 12));
+}
+
+#[test]
+fn render_is_the_default_subcommand() {
+    let dir = temp_dir("default");
+    let exr = dir.join("room.exr");
+    let o = hexray()
+        .args(["--backend", "cpu", "--spp", "1", "--width", "8", "--height", "8", "-q"])
+        .arg("--out")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, meta) = read_exr(&exr).unwrap();
+    assert_eq!(meta.get("scene_name"), Some("tncg15_room"));
+}
+
+#[test]
+fn a_time_budget_ends_the_render_and_keeps_its_samples() {
+    let dir = temp_dir("time");
+    let exr = dir.join("t.exr");
+    let o = hexray()
+        .args(["render", "scenes/tncg15_room.json", "--time", "0.5", "--width", "32"])
+        .args(["--height", "32", "-q", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, meta) = read_exr(&exr).unwrap();
+    let spp: u32 = meta.get("spp").unwrap().parse().unwrap();
+    let secs: f64 = meta.get("render_seconds").unwrap().parse().unwrap();
+    assert!(spp >= 1);
+    // It stops after the pass that crosses the budget; passes aim at 0.25 s.
+    assert!((0.5..5.0).contains(&secs), "rendered for {secs} s");
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_the_render_and_keeps_its_samples() {
+    let dir = temp_dir("ctrlc");
+    let exr = dir.join("c.exr");
+    let mut child = hexray()
+        .args(["render", "scenes/tncg15_room.json", "--time", "600", "--width", "64"])
+        .args(["--height", "64", "-q", "--out"])
+        .arg(&exr)
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "exit status after Ctrl-C");
+    let (_, meta) = read_exr(&exr).unwrap();
+    let spp: u32 = meta.get("spp").unwrap().parse().unwrap();
+    assert!(spp >= 1, "no samples kept");
+    assert!(dir.join("c.png").exists());
+}
