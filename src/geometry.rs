@@ -126,7 +126,7 @@ pub fn intersect_triangle(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
     }
     let t = e2.dot(qvec) * inv_det;
     let t_err = gamma(7) * e2.abs().dot(abs_cross(s, e1)) * inv_det.abs();
-    if t <= t_err {
+    if !(t > t_err) {
         return None;
     }
     Some(TriangleHit { t, t_err, b1, b2 })

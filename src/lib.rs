@@ -13,6 +13,7 @@ pub mod cpu;
 pub mod film;
 pub mod flat;
 pub mod geometry;
+pub mod gpu;
 pub mod light;
 pub mod output;
 pub mod render;

@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use hexray::camera::Camera;
 use hexray::film::Film;
 use hexray::flat::FlatScene;
+use hexray::gpu;
 use hexray::output::{self, Metadata, RgbImage};
 use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
 use hexray::scene::Scene;
@@ -37,10 +38,14 @@ struct Cli {
 enum Command {
     /// Render a scene to EXR (linear) + PNG (sRGB) [default].
     Render(RenderArgs),
+    /// List the GPU adapters wgpu finds, with backend, driver and limits.
+    Info,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
+    /// The GPU when an adapter exists, else the CPU.
+    Auto,
     /// The CPU reference renderer (rayon over tiles).
     Cpu,
     /// The WGSL compute-shader renderer (wgpu).
@@ -53,8 +58,15 @@ struct RenderArgs {
     #[arg(default_value = "scenes/tncg15_room.json")]
     scene: PathBuf,
     /// Which renderer to use.
-    #[arg(long, value_enum, default_value_t = BackendChoice::Cpu)]
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
     backend: BackendChoice,
+    /// Use the first GPU adapter whose name contains this (see `hexray info`).
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Compile the kernel with naga's runtime checks (bounds checks, loop bounding). Off by
+    /// default: see docs/gpu.md for the measurement behind that choice.
+    #[arg(long)]
+    shader_checks: bool,
     /// Samples per pixel. Without --time the default is 64; with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
@@ -101,6 +113,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let args = match cli.command {
         Some(Command::Render(a)) => a,
+        Some(Command::Info) => return info(),
         None => cli.render,
     };
     match render(&args) {
@@ -121,10 +134,6 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
-    if args.backend == BackendChoice::Gpu {
-        eprintln!("error: the GPU backend is not built yet (issue 3); use --backend cpu for now");
-        return Ok(ExitCode::from(EXIT_BAD_INPUT));
-    }
     let out = args.out.clone().unwrap_or_else(|| {
         let name = if scene.desc.name.is_empty() {
             args.scene
@@ -155,7 +164,56 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
     let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
-    let mut backend = CpuBackend::new(&flat, camera, args.seed, threads)?;
+    let gpu = match args.backend {
+        BackendChoice::Cpu => None,
+        BackendChoice::Gpu => match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        },
+        BackendChoice::Auto => match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => {
+                if !args.quiet {
+                    eprintln!(
+                        "hexray: backend gpu (auto): found {}",
+                        gpu::context::describe(&g.info)
+                    );
+                }
+                Some(g)
+            }
+            Err(e) => {
+                if !args.quiet {
+                    eprintln!("hexray: backend cpu (auto): {e}");
+                }
+                None
+            }
+        },
+    };
+    let mut backend: Box<dyn Backend + '_> = match &gpu {
+        None => Box::new(CpuBackend::new(&flat, camera, args.seed, threads)?),
+        Some(g) => {
+            let checks = if args.shader_checks {
+                gpu::Checks::Checked
+            } else {
+                gpu::Checks::Unchecked
+            };
+            let renderer = gpu::GpuRenderer::new(
+                &g.device,
+                &g.queue,
+                &flat,
+                camera,
+                args.seed,
+                hexray::cpu::Faults::NONE,
+                checks,
+            )?;
+            Box::new(gpu::GpuBackend {
+                renderer,
+                adapter: gpu::context::describe(&g.info),
+            })
+        }
+    };
     if !args.quiet {
         eprintln!(
             "hexray: {} ({} triangles, {} spheres, {} emitters, {} BVH nodes) at {}x{} on {} ({})",
@@ -196,7 +254,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         bar
     });
     let mut film = Film::new(args.width, args.height);
-    let report = render_progressive(&mut backend, &mut film, budget, &stop, |spp, secs| {
+    let report = render_progressive(backend.as_mut(), &mut film, budget, &stop, |spp, secs| {
         if let Some(bar) = &progress {
             match budget.spp {
                 Some(_) => bar.set_position(spp as u64),
@@ -204,7 +262,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             }
             bar.set_message(format!("spp {spp}"));
         }
-    })?;
+    });
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
@@ -227,10 +285,11 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     if !args.quiet {
         let (mean, se) = film.image_mean();
         let paths = report.spp as f64 * args.width as f64 * args.height as f64;
-        let why = match report.reason {
+        let why = match &report.reason {
             StopReason::SampleCount => "sample count reached",
             StopReason::TimeBudget => "time budget reached",
             StopReason::Interrupted => "interrupted; samples so far kept",
+            StopReason::Failed(_) => "the backend failed; samples so far kept",
         };
         eprintln!(
             "rendered {} spp in {:.2} s ({:.3} M camera paths/s; {why}); dropped {} samples",
@@ -249,11 +308,38 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             eprintln!("wrote {}", var.display());
         }
     }
-    Ok(if report.reason == StopReason::Interrupted {
-        ExitCode::from(130)
-    } else {
-        ExitCode::SUCCESS
+    Ok(match report.reason {
+        StopReason::Interrupted => ExitCode::from(130),
+        StopReason::Failed(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+        _ => ExitCode::SUCCESS,
     })
+}
+
+fn info() -> ExitCode {
+    let list = gpu::context::adapters();
+    if list.is_empty() {
+        println!(
+            "no GPU adapters found; for software Vulkan: {}",
+            gpu::context::LAVAPIPE_HINT
+        );
+        return ExitCode::SUCCESS;
+    }
+    for (i, a) in list.iter().enumerate() {
+        let info = a.get_info();
+        let l = a.limits();
+        println!("[{i}] {}", gpu::context::describe(&info));
+        println!(
+            "    max storage buffers/stage {}, max storage binding {} MiB, max workgroup invocations {}, max workgroups/dim {}",
+            l.max_storage_buffers_per_shader_stage,
+            l.max_storage_buffer_binding_size >> 20,
+            l.max_compute_invocations_per_workgroup,
+            l.max_compute_workgroups_per_dimension
+        );
+    }
+    ExitCode::SUCCESS
 }
 
 fn write_outputs(out: &Path, film: &Film, meta: &Metadata, args: &RenderArgs) -> Result<()> {

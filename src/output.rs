@@ -127,19 +127,28 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
 /// at the top: the format of the external references in `shared/references/`.
 pub fn read_npy_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let npy = npyz::NpyFile::new(&bytes[..]).with_context(|| format!("parsing {}", path.display()))?;
+    let npy =
+        npyz::NpyFile::new(&bytes[..]).with_context(|| format!("parsing {}", path.display()))?;
     let shape = npy.shape().to_vec();
     if shape.len() != 3 || shape[2] != 3 {
-        bail!("{}: expected shape (height, width, 3), found {shape:?}", path.display());
+        bail!(
+            "{}: expected shape (height, width, 3), found {shape:?}",
+            path.display()
+        );
     }
     if npy.order() != npyz::Order::C {
-        bail!("{}: Fortran-ordered arrays are not supported; save it in C order", path.display());
+        bail!(
+            "{}: Fortran-ordered arrays are not supported; save it in C order",
+            path.display()
+        );
     }
     let (height, width) = (shape[0] as usize, shape[1] as usize);
     let data: Vec<f32> = match npy.dtype() {
-        npyz::DType::Plain(t) if t.size_field() == 8 => {
-            npy.into_vec::<f64>()?.into_iter().map(|x| x as f32).collect()
-        }
+        npyz::DType::Plain(t) if t.size_field() == 8 => npy
+            .into_vec::<f64>()?
+            .into_iter()
+            .map(|x| x as f32)
+            .collect(),
         _ => npy
             .into_vec::<f32>()
             .with_context(|| format!("{}: expected float32 or float64 data", path.display()))?,

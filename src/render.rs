@@ -24,15 +24,17 @@ pub struct Budget {
 }
 
 /// Why a render ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum StopReason {
     SampleCount,
     TimeBudget,
     Interrupted,
+    /// The backend failed (e.g. the GPU device was lost); the film holds every pass before.
+    Failed(String),
 }
 
 /// What a progressive render did.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct RenderReport {
     pub spp: u32,
     pub seconds: f64,
@@ -42,15 +44,16 @@ pub struct RenderReport {
 /// A pass aims at this duration, so that Ctrl-C and a time budget take effect promptly.
 const TARGET_PASS_SECONDS: f64 = 0.25;
 
-/// Runs passes until the budget is spent or `stop` is set. `on_pass(spp_done, elapsed)` is
-/// called after each pass (progress bars, curves).
+/// Runs passes until the budget is spent, `stop` is set or the backend fails; the samples of
+/// every completed pass stay in `film` in all cases. `on_pass(spp_done, elapsed)` is called
+/// after each pass (progress bars, curves).
 pub fn render_progressive(
     backend: &mut dyn Backend,
     film: &mut Film,
     budget: Budget,
     stop: &AtomicBool,
     mut on_pass: impl FnMut(u32, f64),
-) -> anyhow::Result<RenderReport> {
+) -> RenderReport {
     assert!(budget.spp.is_some() || budget.seconds.is_some());
     let start = Instant::now();
     let mut done = film.spp() as u32;
@@ -83,7 +86,9 @@ pub fn render_progressive(
             count = count.min(t - done);
         }
         let t0 = Instant::now();
-        backend.pass(done, count, film)?;
+        if let Err(e) = backend.pass(done, count, film) {
+            break StopReason::Failed(format!("{e:#}"));
+        }
         let dt = t0.elapsed().as_secs_f64();
         // The first pass includes warm-up (thread pool start, shader compilation): measure
         // the cost again on every pass and keep the latest.
@@ -91,11 +96,11 @@ pub fn render_progressive(
         done += count;
         on_pass(done, start.elapsed().as_secs_f64());
     };
-    Ok(RenderReport {
-        spp: done,
+    RenderReport {
+        spp: film.spp() as u32,
         seconds: start.elapsed().as_secs_f64(),
         reason,
-    })
+    }
 }
 
 /// The CPU backend as a [`Backend`], on a rayon pool of its own.

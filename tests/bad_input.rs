@@ -210,10 +210,25 @@ fn run_refused(tag: &str, scene_text: &str) -> (String, std::path::PathBuf) {
         "8",
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(2), "{tag}: exit status; stderr:\n{stderr}");
-    let files: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(files, vec![std::ffi::OsString::from("x.png")], "{tag}: outputs appeared");
-    assert_eq!(std::fs::read(out.join("x.png")).unwrap(), b"old", "{tag}: old output touched");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{tag}: exit status; stderr:\n{stderr}"
+    );
+    let files: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        files,
+        vec![std::ffi::OsString::from("x.png")],
+        "{tag}: outputs appeared"
+    );
+    assert_eq!(
+        std::fs::read(out.join("x.png")).unwrap(),
+        b"old",
+        "{tag}: old output touched"
+    );
     (stderr, file)
 }
 
@@ -232,12 +247,33 @@ fn every_broken_scene_gets_its_own_located_error_and_exit_2() {
         assert!(first.starts_with(&prefix), "{}: {first}", case.name);
         let rest = &first[prefix.len()..];
         let mut parts = rest.splitn(3, ':');
-        let line: usize = parts.next().unwrap().parse().unwrap_or_else(|_| panic!("{}: no line in {first}", case.name));
-        let col: usize = parts.next().unwrap().trim().parse().unwrap_or_else(|_| panic!("{}: no column in {first}", case.name));
+        let line: usize = parts
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap_or_else(|_| panic!("{}: no line in {first}", case.name));
+        let col: usize = parts
+            .next()
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("{}: no column in {first}", case.name));
         let tail = parts.next().unwrap().trim_start();
-        assert!(tail.starts_with(&format!("{}: ", case.path)), "{}: path in {first}", case.name);
-        assert!(first.contains(case.message), "{}: message in {first}", case.name);
-        assert!(stderr.contains("help: "), "{}: no help in {stderr}", case.name);
+        assert!(
+            tail.starts_with(&format!("{}: ", case.path)),
+            "{}: path in {first}",
+            case.name
+        );
+        assert!(
+            first.contains(case.message),
+            "{}: message in {first}",
+            case.name
+        );
+        assert!(
+            stderr.contains("help: "),
+            "{}: no help in {stderr}",
+            case.name
+        );
         if let Some(token) = case.on_line {
             let text_line = text.lines().nth(line - 1).unwrap_or("");
             assert!(
@@ -245,7 +281,11 @@ fn every_broken_scene_gets_its_own_located_error_and_exit_2() {
                 "{}: line {line} is `{text_line}`, expected it to contain `{token}`",
                 case.name
             );
-            assert!(col >= 1 && col <= text_line.chars().count() + 1, "{}: column {col}", case.name);
+            assert!(
+                col >= 1 && col <= text_line.chars().count() + 1,
+                "{}: column {col}",
+                case.name
+            );
         }
     }
 }
@@ -265,19 +305,30 @@ fn a_json_syntax_error_points_at_the_place() {
     let broken = text.replacen("\"vfov_deg\": 90.0,", "\"vfov_deg\": 90.0,,", 1);
     let (stderr, file) = run_refused("syntax", &broken);
     let line_no = broken.lines().position(|l| l.contains("90.0,,")).unwrap() + 1;
-    assert!(stderr.contains(&format!("{}:{line_no}:", file.display())), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{}:{line_no}:", file.display())),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn a_missing_scene_file_is_a_clear_error() {
     let (stderr, _) = {
         let dir = temp_dir("missing");
-        let o = hexray(&["render", dir.join("nope.json").to_str().unwrap(), "--out", dir.join("x.exr").to_str().unwrap()]);
+        let o = hexray(&[
+            "render",
+            dir.join("nope.json").to_str().unwrap(),
+            "--out",
+            dir.join("x.exr").to_str().unwrap(),
+        ]);
         assert_eq!(o.status.code(), Some(2));
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
         (String::from_utf8_lossy(&o.stderr).into_owned(), ())
     };
-    assert!(stderr.contains("nope.json") && stderr.contains("cannot read"), "{stderr}");
+    assert!(
+        stderr.contains("nope.json") && stderr.contains("cannot read"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -292,10 +343,20 @@ fn bad_arguments_exit_2_before_rendering() {
         vec!["--backend", "quantum"],
         vec!["--out", "x.png"],
     ] {
-        let mut all = vec!["render", scene.to_str().unwrap(), "--out", exr.to_str().unwrap()];
+        let mut all = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            exr.to_str().unwrap(),
+        ];
         all.extend(args.iter());
         let o = hexray(&all);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         assert!(!Path::new(&exr).exists() && !Path::new("x.png").exists());
     }
 }

@@ -215,7 +215,10 @@ fn emitter_sampling_matches_its_solid_angle_pdf() {
     let pmf = |k: usize| scene.emitters[k].pmf;
     for p in [Vec3::ZERO, Vec3::new(0.3, -0.2, -0.4)] {
         let pv = emitter_sampling_p(p, &pmf);
-        assert!(pv > sidak_level(), "emitter sampling from {p}: p = {pv:.3e}");
+        assert!(
+            pv > sidak_level(),
+            "emitter sampling from {p}: p = {pv:.3e}"
+        );
     }
 }
 
@@ -234,4 +237,3 @@ fn chi_square_rejects_a_wrong_emitter_selection_pdf() {
     let p = emitter_sampling_p(Vec3::ZERO, &|_| 1.0 / n as f32);
     assert!(p < 1e-6, "p = {p:.3e}");
 }
-

@@ -26,8 +26,24 @@ fn render_writes_exr_png_and_variance_with_metadata() {
     let dir = temp_dir("render");
     let exr = dir.join("cb.exr");
     let o = hexray()
-        .args(["render", "scenes/cornell_box.json", "--backend", "cpu", "--spp", "3"])
-        .args(["--width", "16", "--height", "12", "--seed", "42", "--variance", "--quiet"])
+        .args([
+            "render",
+            "scenes/cornell_box.json",
+            "--backend",
+            "cpu",
+            "--spp",
+            "3",
+        ])
+        .args([
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--seed",
+            "42",
+            "--variance",
+            "--quiet",
+        ])
         .arg("--out")
         .arg(&exr)
         .output()
@@ -50,7 +66,10 @@ fn render_writes_exr_png_and_variance_with_metadata() {
     let secs: f64 = meta.get("render_seconds").unwrap().parse().unwrap();
     assert!(secs > 0.0);
     let (var, _) = read_exr(&dir.join("cb_var.exr")).unwrap();
-    assert!(var.pixels.iter().all(|p| p.iter().all(|&v| v >= 0.0 && v.is_finite())));
+    assert!(var
+        .pixels
+        .iter()
+        .all(|p| p.iter().all(|&v| v >= 0.0 && v.is_finite())));
     let png = image::open(dir.join("cb.png")).unwrap();
     assert_eq!((png.width(), png.height()), (16, 12));
 }
@@ -60,7 +79,17 @@ fn render_is_the_default_subcommand() {
     let dir = temp_dir("default");
     let exr = dir.join("room.exr");
     let o = hexray()
-        .args(["--backend", "cpu", "--spp", "1", "--width", "8", "--height", "8", "-q"])
+        .args([
+            "--backend",
+            "cpu",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+        ])
         .arg("--out")
         .arg(&exr)
         .output()
@@ -75,7 +104,14 @@ fn a_time_budget_ends_the_render_and_keeps_its_samples() {
     let dir = temp_dir("time");
     let exr = dir.join("t.exr");
     let o = hexray()
-        .args(["render", "scenes/tncg15_room.json", "--time", "0.5", "--width", "32"])
+        .args([
+            "render",
+            "scenes/tncg15_room.json",
+            "--time",
+            "0.5",
+            "--width",
+            "32",
+        ])
         .args(["--height", "32", "-q", "--out"])
         .arg(&exr)
         .output()
@@ -95,7 +131,14 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
     let dir = temp_dir("ctrlc");
     let exr = dir.join("c.exr");
     let mut child = hexray()
-        .args(["render", "scenes/tncg15_room.json", "--time", "600", "--width", "64"])
+        .args([
+            "render",
+            "scenes/tncg15_room.json",
+            "--time",
+            "600",
+            "--width",
+            "64",
+        ])
         .args(["--height", "64", "-q", "--out"])
         .arg(&exr)
         .spawn()

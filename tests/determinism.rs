@@ -47,5 +47,9 @@ fn different_seeds_give_different_images() {
         .filter(|(p, q)| p.sum == q.sum)
         .count();
     // Pixels that see only black (none here) or only the light could agree; almost all differ.
-    assert!(same < a.pixels.len() / 20, "{same} of {} pixels equal", a.pixels.len());
+    assert!(
+        same < a.pixels.len() / 20,
+        "{same} of {} pixels equal",
+        a.pixels.len()
+    );
 }

@@ -26,7 +26,14 @@ fn radiance_under_a_square_emitter_matches_the_form_factor() {
     let f = 4.0 * corner_form_factor(1.0, 1.0);
     let (albedo, le) = ([0.8, 0.5, 0.2], [1.0, 2.0, 4.0]);
     let truth = [0, 1, 2].map(|c| albedo[c] * le[c] * f);
-    let film = render_cpu("scenes/analytic/direct_light.json", 8, 8, 1024, 3, Faults::NONE);
+    let film = render_cpu(
+        "scenes/analytic/direct_light.json",
+        8,
+        8,
+        1024,
+        3,
+        Faults::NONE,
+    );
     let (_, se) = film.image_mean();
     // Resolves a 1 % error.
     assert!((0..3).all(|c| 4.0 * se[c] < 0.01 * truth[c]), "s.e. {se:?}");

@@ -17,7 +17,10 @@ const SEED: u32 = 20;
 fn furnace(rel: &str) {
     let film = render_cpu(rel, SIZE, SIZE, SPP, SEED, Faults::NONE);
     let (_, se) = film.image_mean();
-    assert!(se.iter().all(|&s| s < 0.005), "{rel}: s.e. {se:?} too large to resolve 2 %");
+    assert!(
+        se.iter().all(|&s| s < 0.005),
+        "{rel}: s.e. {se:?} too large to resolve 2 %"
+    );
     assert_mean_within_4_se(&film, [1.0; 3], rel);
     assert_eq!(film.dropped(), 0, "{rel}: non-finite samples");
 }
@@ -55,9 +58,19 @@ fn furnace_rejects_a_depth_cap() {
         max_bounces: 8,
         ..Faults::NONE
     };
-    let film = render_cpu("scenes/furnace/diffuse_0_95.json", SIZE, SIZE, SPP, SEED, faults);
+    let film = render_cpu(
+        "scenes/furnace/diffuse_0_95.json",
+        SIZE,
+        SIZE,
+        SPP,
+        SEED,
+        faults,
+    );
     let (_, _, z) = image_mean_z(&film, [1.0; 3]);
-    assert!(z.iter().all(|z| *z < -4.0), "a depth cap went unnoticed: z = {z:?}");
+    assert!(
+        z.iter().all(|z| *z < -4.0),
+        "a depth cap went unnoticed: z = {z:?}"
+    );
 }
 
 /// ... and a mirror that reflects 97 % of what it should (the course report's dark mirror).
@@ -67,7 +80,17 @@ fn furnace_rejects_a_dim_mirror() {
         specular_scale: 0.97,
         ..Faults::NONE
     };
-    let film = render_cpu("scenes/furnace/mirror_sphere.json", SIZE, SIZE, SPP, SEED, faults);
+    let film = render_cpu(
+        "scenes/furnace/mirror_sphere.json",
+        SIZE,
+        SIZE,
+        SPP,
+        SEED,
+        faults,
+    );
     let (_, _, z) = image_mean_z(&film, [1.0; 3]);
-    assert!(z.iter().all(|z| *z < -4.0), "a dim mirror went unnoticed: z = {z:?}");
+    assert!(
+        z.iter().all(|z| *z < -4.0),
+        "a dim mirror went unnoticed: z = {z:?}"
+    );
 }

@@ -62,8 +62,15 @@ pub fn compare_with_mitsuba(ours: &MeanImage) -> (f64, [f64; 3]) {
 fn cpu_cornell_box_agrees_with_mitsuba() {
     let film = render_cpu("scenes/cornell_box.json", 256, 256, 64, 11, Faults::NONE);
     let (beyond, ratio_z) = compare_with_mitsuba(&MeanImage::from_film(&film));
-    assert!(beyond < 0.001, "{:.3} % of block-channels beyond 5 s.e.", 100.0 * beyond);
-    assert!(ratio_z.iter().all(|z| z.abs() <= 4.0), "image-mean ratio z {ratio_z:?}");
+    assert!(
+        beyond < 0.001,
+        "{:.3} % of block-channels beyond 5 s.e.",
+        100.0 * beyond
+    );
+    assert!(
+        ratio_z.iter().all(|z| z.abs() <= 4.0),
+        "image-mean ratio z {ratio_z:?}"
+    );
 }
 
 /// Power: a cornell box whose walls reflect 2 % less (albedo x 0.98 through the dim-mirror

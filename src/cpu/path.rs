@@ -78,7 +78,7 @@ pub fn trace_path(
     loop {
         // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
         // outside the scene, so a miss ends the path.
-        let Some(hit) = intersect_closest(scene, &ray, f32::INFINITY) else {
+        let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
             break;
         };
         let material = scene.materials[hit.material as usize];
@@ -122,10 +122,10 @@ pub fn trace_path(
             let cos_l = -ls.n.dot(wi);
             if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                 let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let target = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
                 let shadow = Ray {
                     o: origin,
-                    d: target - origin,
+                    d: light_point - origin,
                 };
                 if !occluded(scene, &shadow, 1.0) {
                     let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);

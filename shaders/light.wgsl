@@ -1,0 +1,49 @@
+// Area lights: `src/light.rs`, line for line.
+
+struct LightSample {
+    p: vec3<f32>,
+    p_err: vec3<f32>,
+    n: vec3<f32>,
+    le: vec3<f32>,
+    // pmf(triangle) / area.
+    pdf_area: f32,
+}
+
+// The emitter-table row whose CDF interval holds u (first row with cdf > u).
+fn choose_emitter(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = frame.num_emitters - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if emitters[mid].cdf > u {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
+        }
+    }
+    return lo;
+}
+
+// An emitter triangle chosen in proportion to its power, then a point uniformly on its area.
+fn sample_emitter(u_select: f32, u1: f32, u2: f32) -> LightSample {
+    let row = emitters[choose_emitter(u_select)];
+    let tri = triangles[row.triangle];
+    let b = sample_uniform_triangle(u1, u2);
+    let pe = triangle_point(tri, b.y, b.z);
+    return LightSample(pe.p, pe.p_err, triangle_normal(tri), materials[tri.material].emission, row.pmf / row.area);
+}
+
+// The area density with which sample_emitter picks points on triangle tri.
+fn emitter_pdf_area(tri: u32) -> f32 {
+    let row = triangles[tri].emitter;
+    if row == NOT_AN_EMITTER {
+        return 0.0;
+    }
+    let e = emitters[row];
+    return e.pmf / e.area;
+}
+
+// p_omega = p_A r^2 / |cos theta_l|.
+fn area_to_solid_angle(pdf_area: f32, dist2: f32, cos_light: f32) -> f32 {
+    return pdf_area * dist2 / abs(cos_light);
+}

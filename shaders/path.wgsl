@@ -1,0 +1,174 @@
+// The path integrator: `src/cpu/path.rs` again, with the same names, the same steps in the same
+// order and the same step comments. Unidirectional path tracing with next-event estimation and
+// multiple importance sampling (power heuristic); Russian roulette, no maximum depth.
+
+const RR_START_BOUNCE: u32 = 3u;
+const RR_MAX_SURVIVAL: f32 = 0.95;
+
+// The ray through image position (x + jx, y + jy), pixel (0, 0) at the top left (`Camera::ray`).
+fn camera_ray(camera: Camera, x: u32, y: u32, jx: f32, jy: f32) -> Ray {
+    let sx = 2.0 * ((f32(x) + jx) / f32(camera.width)) - 1.0;
+    let sy = 1.0 - 2.0 * ((f32(y) + jy) / f32(camera.height));
+    let d = camera.forward + sx * camera.right + sy * camera.up;
+    return Ray(camera.eye, normalize(d));
+}
+
+fn max_element(v: vec3<f32>) -> f32 {
+    return max(max(v.x, v.y), v.z);
+}
+
+// The radiance arriving at pixel (x, y) along one camera sample's path.
+fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
+    // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
+    let u_camera = draw4(sampler, DIM_CAMERA);
+    var ray = camera_ray(frame.camera, x, y, u_camera.x, u_camera.y);
+
+    var radiance = vec3<f32>(0.0);
+    var throughput = vec3<f32>(1.0);
+    // Product of etap^2 over refractions; throughput x eta_scale is what roulette looks at, so
+    // that radiance scaling at glass boundaries does not end paths inside glass.
+    var eta_scale = 1.0;
+    // Solid-angle pdf of the BSDF sample that produced `ray`; 0 for the camera ray and after a
+    // specular bounce (no light-sampling strategy competes there).
+    var bsdf_pdf = 0.0;
+    var bounce = 0u;
+
+    loop {
+        // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
+        // outside the scene, so a miss ends the path.
+        let candidate = traverse(ray, F32_MAX, false);
+        if !candidate.found {
+            break;
+        }
+        let hit = surface_hit(ray, candidate);
+        let material = materials[hit.material];
+        let wo = -ray.d;
+        let cos_o = dot(hit.n, wo);
+
+        // Step 3 - emission: an emitter seen from its front. After the camera or a specular
+        // bounce it is counted in full; after a diffuse bounce it is weighted by the power
+        // heuristic against light sampling, whose pdf for this point is converted to solid
+        // angle at the previous vertex (the ray's direction is unit, so hit.t is the distance).
+        if material.kind == KIND_EMITTER && cos_o > 0.0 {
+            let le = material.emission;
+            if bsdf_pdf == 0.0 {
+                radiance += throughput * le;
+            } else {
+                let light_pdf = area_to_solid_angle(emitter_pdf_area(hit.prim), hit.t * hit.t, cos_o);
+                radiance += throughput * le * power_heuristic(bsdf_pdf, light_pdf);
+            }
+        }
+
+        // Step 4 - next-event estimation at diffuse surfaces: choose an emitter triangle by
+        // power and a uniform point on it, trace one shadow ray, and add
+        // f · Le · cos θs / p_ω(light), with p_ω the area pdf converted to solid angle,
+        // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
+        let u_light = draw4(sampler, dim_light(bounce));
+        let albedo = material.color;
+        let diffuse = material.kind == KIND_DIFFUSE || (material.kind == KIND_EMITTER && max_element(albedo) > 0.0);
+        if material.kind == KIND_EMITTER && !diffuse {
+            // A black emitter reflects nothing: the path ends here.
+            break;
+        }
+        if diffuse {
+            let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
+            let ls = sample_emitter(u_light.x, u_light.y, u_light.z);
+            let to_light = ls.p - hit.p;
+            let dist2 = dot(to_light, to_light);
+            let wi = to_light / sqrt(dist2);
+            let cos_s = dot(n_facing, wi);
+            let cos_l = -dot(ls.n, wi);
+            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
+                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                let shadow = Ray(origin, light_point - origin);
+                if !occluded(shadow, 1.0) {
+                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                    let f = albedo * FRAC_1_PI;
+                    let w = power_heuristic(light_pdf, cos_s * FRAC_1_PI);
+                    radiance += throughput * f * ls.le * (cos_s * w / light_pdf);
+                }
+            }
+        }
+
+        // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
+        // the sample's weight f · |cos θi| / pdf.
+        let u_bsdf = draw4(sampler, dim_bsdf(bounce));
+        let bs = sample_bsdf(material, hit.n, wo, u_bsdf);
+        throughput *= bs.weight;
+        if bs.pdf == 0.0 {
+            throughput *= frame.specular_scale;
+        }
+        eta_scale *= bs.eta2;
+        bsdf_pdf = bs.pdf;
+        if max_element(throughput) <= 0.0 {
+            break;
+        }
+        ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
+
+        // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
+        // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
+        // unbiased (E[X / q · 1{u < q}] = E[X]) while ending low-throughput paths.
+        if bounce >= RR_START_BOUNCE {
+            let q = min(max_element(throughput) * eta_scale, RR_MAX_SURVIVAL);
+            if u_light.w >= q {
+                break;
+            }
+            throughput /= q;
+        }
+        bounce += 1u;
+        if bounce >= frame.max_bounces {
+            break;
+        }
+    }
+    return radiance;
+}
+
+// Finite by bit pattern: the exponent is not all ones (x != x is not reliable on every backend).
+fn is_finite(v: vec3<f32>) -> bool {
+    let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
+    return all(e != vec3<u32>(0x7f800000u));
+}
+
+// One invocation per pixel of the dispatch's tile: the frame's samples of that pixel, added to
+// the pass's sums (folded into f64 by the host after the pass), and the running mean updated
+// incrementally, m += (Σx − k·m) / (n + k), which stays accurate in f32 at any sample count,
+// then written to the output texture for a viewer.
+@compute @workgroup_size(8, 8, 1)
+fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.tile_size.x || gid.y >= frame.tile_size.y {
+        return;
+    }
+    let x = frame.tile_origin.x + gid.x;
+    let y = frame.tile_origin.y + gid.y;
+    let index = y * frame.camera.width + x;
+    var sum = vec3<f32>(0.0);
+    var sum_sq = vec3<f32>(0.0);
+    var n = 0.0;
+    var dropped = 0.0;
+    for (var s = frame.first_sample; s < frame.first_sample + frame.sample_count; s++) {
+        let l = trace_path(x, y, Sampler(frame.seed, index, s));
+        // A non-finite sample is counted and dropped, never accumulated.
+        if is_finite(l) {
+            sum += l;
+            sum_sq += l * l;
+            n += 1.0;
+        } else {
+            dropped += 1.0;
+        }
+    }
+    var sums = pixel_sums[index];
+    sums.sum += sum;
+    sums.sum_sq += sum_sq;
+    sums.n += n;
+    sums.dropped += dropped;
+    pixel_sums[index] = sums;
+
+    var mean = running_mean[index];
+    let total = mean.w + n;
+    if total > 0.0 {
+        mean = vec4<f32>(mean.xyz + (sum - n * mean.xyz) / total, total);
+    }
+    running_mean[index] = mean;
+    textureStore(output, vec2<u32>(x, y), vec4<f32>(mean.xyz, 1.0));
+}

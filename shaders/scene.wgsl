@@ -1,0 +1,93 @@
+// The shared flattened scene, as `src/flat.rs` and `src/camera.rs` lay it out.
+// Every struct here has a Rust twin of the same name and fields; `tests/layout.rs` compares
+// sizes and offsets with naga's reflection of this file.
+
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    v1: vec3<f32>,
+    emitter: u32,
+    v2: vec3<f32>,
+    pad: u32,
+}
+
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+    pad: array<u32, 3>,
+}
+
+struct Material {
+    color: vec3<f32>,
+    kind: u32,
+    emission: vec3<f32>,
+    ior: f32,
+}
+
+struct Emitter {
+    triangle: u32,
+    area: f32,
+    cdf: f32,
+    pmf: f32,
+}
+
+struct BvhNode {
+    min: vec3<f32>,
+    offset: u32,
+    max: vec3<f32>,
+    count_axis: u32,
+}
+
+struct Camera {
+    eye: vec3<f32>,
+    width: u32,
+    forward: vec3<f32>,
+    height: u32,
+    right: vec3<f32>,
+    pad0: u32,
+    up: vec3<f32>,
+    pad1: u32,
+}
+
+// One dispatch: which pixels (a tile), which samples, and the test-only faults.
+struct Frame {
+    camera: Camera,
+    seed: u32,
+    first_sample: u32,
+    sample_count: u32,
+    num_emitters: u32,
+    tile_origin: vec2<u32>,
+    tile_size: vec2<u32>,
+    max_bounces: u32,
+    specular_scale: f32,
+    pad: vec2<u32>,
+}
+
+// The sums of one pass of samples of one pixel (folded into f64 on the host).
+struct PixelSums {
+    sum: vec3<f32>,
+    n: f32,
+    sum_sq: vec3<f32>,
+    dropped: f32,
+}
+
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_MIRROR: u32 = 1u;
+const KIND_GLASS: u32 = 2u;
+const KIND_EMITTER: u32 = 3u;
+const NOT_AN_EMITTER: u32 = 0xffffffffu;
+const PRIM_SPHERE_BIT: u32 = 0x80000000u;
+// The largest f32: "no limit" for ray parameters (WGSL has no infinity literal).
+const F32_MAX: f32 = 3.40282347e38;
+
+@group(0) @binding(0) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(2) var<storage, read> materials: array<Material>;
+@group(0) @binding(3) var<storage, read> emitters: array<Emitter>;
+@group(0) @binding(4) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(5) var<storage, read> prims: array<u32>;
+@group(0) @binding(6) var<uniform> frame: Frame;
+@group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;
+@group(0) @binding(8) var<storage, read_write> running_mean: array<vec4<f32>>;
+@group(0) @binding(9) var output: texture_storage_2d<rgba32float, write>;

@@ -1,0 +1,409 @@
+//! The GPU backend's work: upload the flattened scene as it is, compile the path-tracing
+//! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
+
+use crate::camera::Camera;
+use crate::cpu::Faults;
+use crate::film::Film;
+use crate::flat::FlatScene;
+use anyhow::{anyhow, bail, Context, Result};
+use bytemuck::{Pod, Zeroable};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
+/// which tile, and the test-only faults. Seven vec4s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Frame {
+    pub camera: Camera,
+    pub seed: u32,
+    pub first_sample: u32,
+    pub sample_count: u32,
+    pub num_emitters: u32,
+    pub tile_origin: [u32; 2],
+    pub tile_size: [u32; 2],
+    pub max_bounces: u32,
+    pub specular_scale: f32,
+    pub pad: [u32; 2],
+}
+
+/// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
+/// at most [`MAX_PASS_SPP`] samples, and the host folds it into the f64 film.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct PixelSums {
+    pub sum: [f32; 3],
+    pub n: f32,
+    pub sum_sq: [f32; 3],
+    pub dropped: f32,
+}
+
+/// Workgroup size of the kernel (8 x 8, `@workgroup_size` in `shaders/path.wgsl`).
+pub const WORKGROUP: u32 = 8;
+
+/// At most this many samples per pixel go into one pass's f32 sums before they are folded into
+/// f64 on the host: the relative rounding error of an f32 sum of k terms is below k · 2^-24,
+/// so 64 samples keep it under 4e-6 (`tests/precision.rs` measures the alternative, a running
+/// f32 sum, at 10^5 samples).
+pub const MAX_PASS_SPP: u32 = 64;
+
+/// A dispatch should end within this time: drivers reset GPUs whose dispatches run for
+/// seconds (wgpu #2554), and lavapipe's run at most ~0.5 s this way.
+pub const TARGET_DISPATCH_SECONDS: f64 = 0.05;
+
+/// How the kernel is compiled: with naga's runtime checks (bounds checks and loop bounding,
+/// wgpu's default since 25) or without (`create_shader_module_trusted`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Checks {
+    Checked,
+    Unchecked,
+}
+
+/// The GPU renderer for one scene, camera and seed.
+pub struct GpuRenderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    frame_buffer: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    texture: wgpu::Texture,
+    frame: Frame,
+    /// The dispatch size, in camera paths, that should take about TARGET_DISPATCH_SECONDS;
+    /// measured and updated after every pass.
+    paths_per_dispatch: u64,
+    lost: Arc<(AtomicBool, Mutex<String>)>,
+}
+
+fn storage<T: Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buffer {
+    // wgpu refuses zero-sized bindings: an empty array (a scene without spheres) is one zeroed
+    // element that nothing references.
+    let zero = [T::zeroed()];
+    let data: &[T] = if data.is_empty() { &zero } else { data };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(data),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+impl GpuRenderer {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &FlatScene,
+        camera: Camera,
+        seed: u32,
+        faults: Faults,
+        checks: Checks,
+    ) -> Result<GpuRenderer> {
+        let (width, height) = (camera.width, camera.height);
+        let pixels = (width as u64) * (height as u64);
+        let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));
+        {
+            let lost = lost.clone();
+            device.set_device_lost_callback(move |reason, msg| {
+                *lost.1.lock().unwrap() = format!("{reason:?}: {msg}");
+                lost.0.store(true, Ordering::SeqCst);
+            });
+        }
+
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let source = super::shader::source();
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some("hexray path tracer"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        let module = match checks {
+            Checks::Checked => device.create_shader_module(desc),
+            // SAFETY: the kernel's loops all terminate (BVH traversal visits each node at most
+            // once; the path loop ends by Russian roulette with probability >= 0.05 per bounce
+            // after bounce 3; the sample loop is counted), and every index is in bounds by
+            // construction (node, primitive and material indices come from the flattened scene,
+            // pixel indices are checked against the tile).
+            Checks::Unchecked => unsafe {
+                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+            },
+        };
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("hexray render"),
+            layout: None,
+            module: &module,
+            entry_point: Some("render"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("the GPU rejected the path-tracing kernel: {e}");
+        }
+
+        let frame = Frame {
+            camera,
+            seed,
+            first_sample: 0,
+            sample_count: 0,
+            num_emitters: scene.emitters.len() as u32,
+            tile_origin: [0, 0],
+            tile_size: [width, height],
+            max_bounces: faults.max_bounces,
+            specular_scale: faults.specular_scale,
+            pad: [0; 2],
+        };
+        let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: bytemuck::bytes_of(&frame),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let sums_size = pixels * std::mem::size_of::<PixelSums>() as u64;
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel sums"),
+            size: sums_size,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel sums readback"),
+            size: sums_size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let running_mean = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("running mean"),
+            size: pixels * 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("output"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let buffers = [
+            storage(device, "triangles", &scene.triangles),
+            storage(device, "spheres", &scene.spheres),
+            storage(device, "materials", &scene.materials),
+            storage(device, "emitters", &scene.emitters),
+            storage(device, "bvh nodes", &scene.nodes),
+            storage(device, "primitive refs", &scene.prims),
+        ];
+        let mut entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: frame_buffer.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: sums.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 8,
+            resource: running_mean.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 9,
+            resource: wgpu::BindingResource::TextureView(&view),
+        });
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("binding the scene failed: {e}");
+        }
+        Ok(GpuRenderer {
+            device: device.clone(),
+            queue: queue.clone(),
+            pipeline,
+            bind_group,
+            frame_buffer,
+            sums,
+            readback,
+            texture,
+            frame,
+            paths_per_dispatch: 1 << 16,
+            lost,
+        })
+    }
+
+    fn check_device(&self) -> Result<()> {
+        if self.lost.0.load(Ordering::SeqCst) {
+            bail!("the GPU device was lost ({})", self.lost.1.lock().unwrap());
+        }
+        Ok(())
+    }
+
+    /// Adds samples `first..first + count` of every pixel to `film`. The samples are split into
+    /// passes of at most MAX_PASS_SPP, each pass into dispatches of about `paths_per_dispatch`
+    /// paths (whole rows of pixels times a number of samples); after each pass its f32 sums are
+    /// read back and folded into the f64 film. If the device fails, the film keeps every pass
+    /// completed before, and the error says what happened.
+    pub fn render(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        let mut done = 0;
+        while done < count {
+            let n = (count - done).min(MAX_PASS_SPP);
+            self.pass(first + done, n, film)?;
+            done += n;
+        }
+        Ok(())
+    }
+
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        self.check_device()?;
+        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
+        let start = Instant::now();
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.sums, 0, None);
+        self.queue.submit([encoder.finish()]);
+
+        // Plan: as many samples of the whole image as fit the dispatch budget; if one sample
+        // of the whole image is too much, bands of rows (multiples of the workgroup height).
+        let image = (w as u64) * (h as u64);
+        let spp_per_dispatch = (self.paths_per_dispatch / image).clamp(1, count as u64) as u32;
+        let rows = if spp_per_dispatch > 1 || self.paths_per_dispatch >= image {
+            h
+        } else {
+            let r = (self.paths_per_dispatch / w as u64).max(1) as u32;
+            (r.div_ceil(WORKGROUP) * WORKGROUP).min(h)
+        };
+        let mut s = 0;
+        while s < count {
+            let k = spp_per_dispatch.min(count - s);
+            let mut y = 0;
+            while y < h {
+                let band = rows.min(h - y);
+                let frame = Frame {
+                    first_sample: first + s,
+                    sample_count: k,
+                    tile_origin: [0, y],
+                    tile_size: [w, band],
+                    ..self.frame
+                };
+                // One submission per dispatch: the uniform write lands before this dispatch and
+                // after the previous one.
+                self.queue
+                    .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
+                let mut encoder = self.device.create_command_encoder(&Default::default());
+                {
+                    let mut cpass = encoder.begin_compute_pass(&Default::default());
+                    cpass.set_pipeline(&self.pipeline);
+                    cpass.set_bind_group(0, &self.bind_group, &[]);
+                    cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), band.div_ceil(WORKGROUP), 1);
+                }
+                self.queue.submit([encoder.finish()]);
+                y += band;
+            }
+            s += k;
+        }
+
+        // Read the pass's sums back and fold them into the film in f64.
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.read_buffer(&self.readback)?;
+        let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
+        for (p, s) in film.pixels.iter_mut().zip(&sums) {
+            for c in 0..3 {
+                p.sum[c] += s.sum[c] as f64;
+                p.sum_sq[c] += s.sum_sq[c] as f64;
+            }
+            p.n += s.n as u64;
+            p.dropped += s.dropped as u64;
+        }
+
+        // Size the next dispatches from this pass's throughput.
+        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
+        self.paths_per_dispatch =
+            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
+        Ok(())
+    }
+
+    /// Maps a MAP_READ buffer after the queued work, copies its bytes out, unmaps it.
+    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| anyhow!("waiting for the GPU: {e}"))?;
+        self.check_device()?;
+        rx.recv()
+            .context("the GPU never answered the readback")?
+            .map_err(|e| anyhow!("reading back from the GPU: {e}"))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| anyhow!("mapping the readback: {e}"))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+
+    /// The running mean the kernel keeps in its storage texture (what a viewer would show),
+    /// copied out, row 0 at the top.
+    pub fn read_texture(&self) -> Result<Vec<[f32; 4]>> {
+        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
+        let row = (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("texture readback"),
+            size: (row * h) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.read_buffer(&buffer)?;
+        let mut out = Vec::with_capacity((w * h) as usize);
+        for y in 0..h as usize {
+            let line = &bytes[y * row as usize..y * row as usize + w as usize * 16];
+            out.extend(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(line));
+        }
+        Ok(out)
+    }
+}

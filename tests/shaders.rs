@@ -1,0 +1,26 @@
+//! The WGSL is code: every file in `shaders/` is part of the kernel, and naga (the front end
+//! wgpu uses) parses and validates it, here with no GPU.
+
+use hexray::gpu::shader::{source, validate, FILES};
+
+#[test]
+fn every_wgsl_file_is_in_the_kernel() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut on_disk: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".wgsl"))
+        .collect();
+    on_disk.sort();
+    let mut used: Vec<String> = FILES.iter().map(|(n, _)| n.to_string()).collect();
+    used.sort();
+    assert_eq!(on_disk, used);
+}
+
+#[test]
+fn the_kernel_parses_and_validates_with_naga() {
+    let src = source();
+    if let Err(e) = validate(&src) {
+        panic!("{e}");
+    }
+}
