@@ -3,6 +3,11 @@
 
 const STACK_SIZE: u32 = 64u;
 
+// Entry k of the primitive references (packed four to a vec4<u32>).
+fn prim_ref(k: u32) -> u32 {
+    return prims[k >> 2u][k & 3u];
+}
+
 // The primitive a traversal found nearest so far.
 struct Candidate {
     found: bool,
@@ -28,7 +33,7 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
             let count = node.count_axis & 0xffffu;
             if count > 0u {
                 for (var k = node.offset; k < node.offset + count; k++) {
-                    let prim = prims[k];
+                    let prim = prim_ref(k);
                     var t = 0.0;
                     var t_err = 0.0;
                     var b1 = 0.0;

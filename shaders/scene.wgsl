@@ -15,7 +15,9 @@ struct Sphere {
     center: vec3<f32>,
     radius: f32,
     material: u32,
-    pad: array<u32, 3>,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 struct Material {
@@ -81,12 +83,8 @@ const PRIM_SPHERE_BIT: u32 = 0x80000000u;
 // The largest f32: "no limit" for ray parameters (WGSL has no infinity literal).
 const F32_MAX: f32 = 3.40282347e38;
 
-@group(0) @binding(0) var<storage, read> triangles: array<Triangle>;
-@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
-@group(0) @binding(2) var<storage, read> materials: array<Material>;
-@group(0) @binding(3) var<storage, read> emitters: array<Emitter>;
-@group(0) @binding(4) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(5) var<storage, read> prims: array<u32>;
+// The scene arrays (bindings 0 to 5) are declared in bindings_storage.wgsl or
+// bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/render.rs).
 @group(0) @binding(6) var<uniform> frame: Frame;
 @group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;
 @group(0) @binding(8) var<storage, read_write> running_mean: array<vec4<f32>>;

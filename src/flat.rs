@@ -44,7 +44,9 @@ pub struct Sphere {
     pub center: [f32; 3],
     pub radius: f32,
     pub material: u32,
-    pub pad: [u32; 3],
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// A material: `color` is the albedo (diffuse, and an emitter's optional reflectance), the
@@ -174,7 +176,7 @@ impl FlatScene {
                 center: f3(s.center),
                 radius: s.radius as f32,
                 material: material_id(&s.material),
-                pad: [0; 3],
+                ..Default::default()
             })
             .collect();
 

@@ -52,6 +52,12 @@ enum BackendChoice {
     Gpu,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ResidencyChoice {
+    Storage,
+    Uniform,
+}
+
 #[derive(Args, Debug, Clone)]
 struct RenderArgs {
     /// Scene file (JSON).
@@ -67,6 +73,10 @@ struct RenderArgs {
     /// default: see docs/gpu.md for the measurement behind that choice.
     #[arg(long)]
     shader_checks: bool,
+    /// Where the GPU keeps the scene arrays (default: uniform buffers on CPU adapters when the
+    /// scene fits, else storage buffers).
+    #[arg(long, value_enum)]
+    scene_residency: Option<ResidencyChoice>,
     /// Samples per pixel. Without --time the default is 64; with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
@@ -199,6 +209,11 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             } else {
                 gpu::Checks::Unchecked
             };
+            let residency = match args.scene_residency {
+                Some(ResidencyChoice::Storage) => gpu::Residency::Storage,
+                Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
+                None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
+            };
             let renderer = gpu::GpuRenderer::new(
                 &g.device,
                 &g.queue,
@@ -207,6 +222,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 args.seed,
                 hexray::cpu::Faults::NONE,
                 checks,
+                residency,
             )?;
             Box::new(gpu::GpuBackend {
                 renderer,

@@ -5,7 +5,7 @@
 use hexray::camera::Camera;
 use hexray::flat::{BvhNode, Emitter, Material, Sphere, Triangle};
 use hexray::gpu::render::{Frame, PixelSums};
-use hexray::gpu::shader::{source, validate};
+use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
 use std::mem::{offset_of, size_of};
 
 macro_rules! rust_layout {
@@ -35,7 +35,7 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
 
 #[test]
 fn shared_structs_match_their_wgsl_declarations_field_by_field() {
-    let (module, _) = validate(&source()).unwrap();
+    let (module, _) = validate(&source(Residency::Storage, ArrayLengths::default())).unwrap();
     let shared = [
         rust_layout!(Triangle {
             v0,
@@ -49,7 +49,9 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             center,
             radius,
             material,
-            pad
+            pad0,
+            pad1,
+            pad2
         }),
         rust_layout!(Material {
             color,
@@ -115,7 +117,7 @@ fn a_reordered_field_is_caught() {
         cdf: f32,
         pmf: f32,
     }
-    let (module, _) = validate(&source()).unwrap();
+    let (module, _) = validate(&source(Residency::Storage, ArrayLengths::default())).unwrap();
     let (_, _, fields) = rust_layout!(Emitter {
         area,
         triangle,

@@ -1,7 +1,7 @@
 //! The WGSL is code: every file in `shaders/` is part of the kernel, and naga (the front end
 //! wgpu uses) parses and validates it, here with no GPU.
 
-use hexray::gpu::shader::{source, validate, FILES};
+use hexray::gpu::shader::{all_files, source, validate, ArrayLengths, Residency};
 
 #[test]
 fn every_wgsl_file_is_in_the_kernel() {
@@ -12,15 +12,25 @@ fn every_wgsl_file_is_in_the_kernel() {
         .filter(|n| n.ends_with(".wgsl"))
         .collect();
     on_disk.sort();
-    let mut used: Vec<String> = FILES.iter().map(|(n, _)| n.to_string()).collect();
+    let mut used: Vec<String> = all_files().iter().map(|n| n.to_string()).collect();
     used.sort();
     assert_eq!(on_disk, used);
 }
 
 #[test]
-fn the_kernel_parses_and_validates_with_naga() {
-    let src = source();
-    if let Err(e) = validate(&src) {
-        panic!("{e}");
+fn the_kernel_parses_and_validates_with_naga_in_both_residencies() {
+    let lengths = ArrayLengths {
+        triangles: 26,
+        spheres: 1,
+        materials: 9,
+        emitters: 2,
+        nodes: 31,
+        prims: 7,
+    };
+    for residency in [Residency::Storage, Residency::Uniform] {
+        let src = source(residency, lengths);
+        if let Err(e) = validate(&src) {
+            panic!("{residency:?}: {e}");
+        }
     }
 }

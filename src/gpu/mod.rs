@@ -7,6 +7,7 @@ pub mod shader;
 
 pub use context::{acquire, Gpu, GpuError};
 pub use render::{Checks, GpuRenderer};
+pub use shader::Residency;
 
 use crate::film::Film;
 

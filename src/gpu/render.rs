@@ -1,6 +1,7 @@
 //! The GPU backend's work: upload the flattened scene as it is, compile the path-tracing
 //! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
 
+use super::shader::{ArrayLengths, Residency};
 use crate::camera::Camera;
 use crate::cpu::Faults;
 use crate::film::Film;
@@ -78,7 +79,13 @@ pub struct GpuRenderer {
     lost: Arc<(AtomicBool, Mutex<String>)>,
 }
 
-fn storage<T: Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buffer {
+/// Uploads one scene array as it is laid out on the host.
+fn upload<T: Pod>(
+    device: &wgpu::Device,
+    residency: Residency,
+    label: &str,
+    data: &[T],
+) -> wgpu::Buffer {
     // wgpu refuses zero-sized bindings: an empty array (a scene without spheres) is one zeroed
     // element that nothing references.
     let zero = [T::zeroed()];
@@ -86,7 +93,96 @@ fn storage<T: Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buff
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(data),
-        usage: wgpu::BufferUsages::STORAGE,
+        usage: match residency {
+            Residency::Storage => wgpu::BufferUsages::STORAGE,
+            Residency::Uniform => wgpu::BufferUsages::UNIFORM,
+        },
+    })
+}
+
+/// The primitive references packed four to a vec4<u32> (zero-padded), as both residencies
+/// declare them.
+fn packed_prims(scene: &FlatScene) -> Vec<[u32; 4]> {
+    scene
+        .prims
+        .chunks(4)
+        .map(|c| {
+            let mut v = [0u32; 4];
+            v[..c.len()].copy_from_slice(c);
+            v
+        })
+        .collect()
+}
+
+/// The lengths the uniform residency declares.
+pub fn array_lengths(scene: &FlatScene) -> ArrayLengths {
+    ArrayLengths {
+        triangles: scene.triangles.len(),
+        spheres: scene.spheres.len(),
+        materials: scene.materials.len(),
+        emitters: scene.emitters.len(),
+        nodes: scene.nodes.len(),
+        prims: scene.prims.len().div_ceil(4),
+    }
+}
+
+impl Residency {
+    /// Uniform buffers on CPU adapters (lavapipe, llvmpipe) when every array fits the device's
+    /// uniform binding limit; storage buffers otherwise. Real GPUs get storage buffers: their
+    /// uniform (constant) caches serialise divergent indices, which BVH traversal has.
+    pub fn preferred(info: &wgpu::AdapterInfo, limits: &wgpu::Limits, scene: &FlatScene) -> Self {
+        let max = limits.max_uniform_buffer_binding_size as usize;
+        let sizes = [
+            std::mem::size_of_val(&scene.triangles[..]),
+            std::mem::size_of_val(&scene.spheres[..]),
+            std::mem::size_of_val(&scene.materials[..]),
+            std::mem::size_of_val(&scene.emitters[..]),
+            std::mem::size_of_val(&scene.nodes[..]),
+            16 * scene.prims.len().div_ceil(4),
+        ];
+        if info.device_type == wgpu::DeviceType::Cpu && sizes.iter().all(|&s| s <= max) {
+            Residency::Uniform
+        } else {
+            Residency::Storage
+        }
+    }
+}
+
+/// The bindings of `shaders/scene.wgsl`: the six scene arrays (storage or uniform), the frame
+/// (uniform), the pass sums and the running mean (read-write storage), the output texture.
+fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindGroupLayout {
+    let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let scene_array = match residency {
+        Residency::Storage => wgpu::BufferBindingType::Storage { read_only: true },
+        Residency::Uniform => wgpu::BufferBindingType::Uniform,
+    };
+    let read_write = wgpu::BufferBindingType::Storage { read_only: false };
+    let mut entries: Vec<_> = (0..6).map(|b| buffer(b, scene_array)).collect();
+    entries.push(buffer(6, wgpu::BufferBindingType::Uniform));
+    entries.push(buffer(7, read_write));
+    entries.push(buffer(8, read_write));
+    entries.push(wgpu::BindGroupLayoutEntry {
+        binding: 9,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format: wgpu::TextureFormat::Rgba32Float,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        count: None,
+    });
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &entries,
     })
 }
 
@@ -99,6 +195,7 @@ impl GpuRenderer {
         seed: u32,
         faults: Faults,
         checks: Checks,
+        residency: Residency,
     ) -> Result<GpuRenderer> {
         let (width, height) = (camera.width, camera.height);
         let pixels = (width as u64) * (height as u64);
@@ -112,7 +209,7 @@ impl GpuRenderer {
         }
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let source = super::shader::source();
+        let source = super::shader::source(residency, array_lengths(scene));
         let desc = wgpu::ShaderModuleDescriptor {
             label: Some("hexray path tracer"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -128,9 +225,15 @@ impl GpuRenderer {
                 device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
             },
         };
+        let layout = bind_group_layout(device, residency);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("hexray render"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("hexray render"),
-            layout: None,
+            layout: Some(&pipeline_layout),
             module: &module,
             entry_point: Some("render"),
             compilation_options: Default::default(),
@@ -194,12 +297,12 @@ impl GpuRenderer {
         });
         let view = texture.create_view(&Default::default());
         let buffers = [
-            storage(device, "triangles", &scene.triangles),
-            storage(device, "spheres", &scene.spheres),
-            storage(device, "materials", &scene.materials),
-            storage(device, "emitters", &scene.emitters),
-            storage(device, "bvh nodes", &scene.nodes),
-            storage(device, "primitive refs", &scene.prims),
+            upload(device, residency, "triangles", &scene.triangles),
+            upload(device, residency, "spheres", &scene.spheres),
+            upload(device, residency, "materials", &scene.materials),
+            upload(device, residency, "emitters", &scene.emitters),
+            upload(device, residency, "bvh nodes", &scene.nodes),
+            upload(device, residency, "primitive refs", &packed_prims(scene)),
         ];
         let mut entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
@@ -228,7 +331,7 @@ impl GpuRenderer {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
-            layout: &pipeline.get_bind_group_layout(0),
+            layout: &layout,
             entries: &entries,
         });
         if let Some(e) = pollster::block_on(scope.pop()) {

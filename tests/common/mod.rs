@@ -56,3 +56,48 @@ pub fn assert_mean_within_4_se(film: &Film, truth: [f64; 3], what: &str) {
         mean[0], mean[1], mean[2], truth[0], truth[1], truth[2], z[0], z[1], z[2]
     );
 }
+
+/// The GPU for tests, shared by all tests of a binary: None (with the reason printed) when no
+/// adapter exists, unless `CI` is set, where a missing adapter is a failure (CI installs
+/// lavapipe, so GPU tests must run there).
+pub fn gpu() -> Option<&'static hexray::gpu::Gpu> {
+    use std::sync::OnceLock;
+    static GPU: OnceLock<Result<hexray::gpu::Gpu, String>> = OnceLock::new();
+    match GPU.get_or_init(|| hexray::gpu::acquire(None).map_err(|e| e.to_string())) {
+        Ok(g) => Some(g),
+        Err(e) if std::env::var_os("CI").is_some() => panic!("CI is set but {e}"),
+        Err(e) => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+    }
+}
+
+/// Renders `spp` samples per pixel of a scene file on the GPU backend (no runtime checks, as
+/// the CLI does).
+pub fn render_gpu(
+    gpu: &hexray::gpu::Gpu,
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    faults: Faults,
+) -> Film {
+    let (scene, flat) = load(rel);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut r = hexray::gpu::GpuRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        &flat,
+        camera,
+        seed,
+        faults,
+        hexray::gpu::Checks::Unchecked,
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+    )
+    .unwrap();
+    let mut film = Film::new(width, height);
+    r.render(0, spp, &mut film).unwrap();
+    film
+}

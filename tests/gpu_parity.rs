@@ -1,0 +1,73 @@
+//! The GPU computes the same image as the CPU reference, shown statistically on lavapipe (or a
+//! real GPU): per 8x8 block and channel, Welch's t-test of the two backends' block means (their
+//! variances from Σx²), with a Bonferroni correction over blocks x channels at α = 0.01 overall,
+//! and each channel's image-mean ratio within 4 s.e. of 1. The two renders use different seeds,
+//! so they are independent samples, as the t-test assumes.
+
+mod common;
+use common::*;
+use hexray::cpu::Faults;
+use hexray::stats::{welch_blocks, MeanImage};
+
+const SIZE: u32 = 64;
+
+struct Parity {
+    rejected_blocks: usize,
+    tests: usize,
+    ratio_z: [f64; 3],
+}
+
+fn parity(rel: &str, spp: u32, gpu_faults: Faults) -> Option<Parity> {
+    let gpu = gpu()?;
+    let a = MeanImage::from_film(&render_cpu(rel, SIZE, SIZE, spp, 1, Faults::NONE));
+    let b = MeanImage::from_film(&render_gpu(gpu, rel, SIZE, SIZE, spp, 2, gpu_faults));
+    let report = welch_blocks(&a.blocks(8), &b.blocks(8), 0.01);
+    let (ma, sa) = a.grand_mean();
+    let (mb, sb) = b.grand_mean();
+    let ratio_z = [0, 1, 2].map(|c| {
+        let r = mb[c] / ma[c];
+        let se = r * ((sa[c] / ma[c]).powi(2) + (sb[c] / mb[c]).powi(2)).sqrt();
+        (r - 1.0) / se
+    });
+    eprintln!(
+        "{rel} at {spp} spp: {} of {} block-channels rejected (smallest p {:.2e}, largest |t| {:.2}); \
+         GPU/CPU mean ratio z {:.2} {:.2} {:.2}",
+        report.rejected, report.tests, report.smallest_p, report.largest_t, ratio_z[0], ratio_z[1], ratio_z[2]
+    );
+    Some(Parity {
+        rejected_blocks: report.rejected,
+        tests: report.tests,
+        ratio_z,
+    })
+}
+
+fn assert_same(rel: &str, spp: u32) {
+    let Some(p) = parity(rel, spp, Faults::NONE) else {
+        return;
+    };
+    assert_eq!(
+        p.rejected_blocks, 0,
+        "{rel}: {} of {} block-channels differ",
+        p.rejected_blocks, p.tests
+    );
+    assert!(
+        p.ratio_z.iter().all(|z| z.abs() <= 4.0),
+        "{rel}: mean ratio z {:?}",
+        p.ratio_z
+    );
+}
+
+#[test]
+fn gpu_matches_cpu_on_tncg15_room() {
+    assert_same("scenes/tncg15_room.json", 64);
+}
+
+#[test]
+fn gpu_matches_cpu_on_glass_room() {
+    assert_same("scenes/glass_room.json", 64);
+}
+
+#[test]
+fn gpu_matches_cpu_on_cornell_box() {
+    assert_same("scenes/cornell_box.json", 64);
+}
