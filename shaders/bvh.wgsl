@@ -1,6 +1,8 @@
 // The BVH traversal: `src/bvh.rs`, one traversal with a closest-hit and an any-hit mode, near
 // child first, an explicit stack in a private array.
 
+// Specialised by the host to the BVH's depth (`bvh::depth`): the traversal pushes at most one
+// node per level.
 const STACK_SIZE: u32 = 64u;
 
 // Entry k of the primitive references (packed four to a vec4<u32>).

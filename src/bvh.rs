@@ -193,6 +193,24 @@ fn build_node(
     index
 }
 
+/// The number of interior nodes on the longest root-to-leaf path: the most entries a
+/// near-first traversal ever holds on its stack.
+pub fn depth(nodes: &[BvhNode]) -> usize {
+    fn walk(nodes: &[BvhNode], i: usize) -> usize {
+        let n = &nodes[i];
+        if n.count() > 0 {
+            0
+        } else {
+            1 + walk(nodes, i + 1).max(walk(nodes, n.offset as usize))
+        }
+    }
+    if nodes.is_empty() {
+        0
+    } else {
+        walk(nodes, 0)
+    }
+}
+
 /// In-place partition; returns the number of elements for which `pred` holds (moved first).
 fn partition(v: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
     let mut i = 0;
@@ -344,6 +362,54 @@ mod tests {
             v2: c,
             ..Default::default()
         }
+    }
+
+    /// `depth` is the traversal stack's high-water mark: checked against the largest stack a
+    /// near-first traversal actually reaches over many rays.
+    #[test]
+    fn depth_bounds_the_traversal_stack() {
+        use crate::sampling::pcg4d;
+        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 3, 4])[0]);
+        let tris: Vec<Triangle> = (0..500u32)
+            .map(|i| {
+                let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 20.0;
+                let v = |k| (c + Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2))).into();
+                tri(v(3), v(6), v(9))
+            })
+            .collect();
+        let (nodes, _) = build(&tris, &[]);
+        let depth = depth(&nodes);
+        // Replay the traversal order of `traverse` with every box hit: the worst case.
+        let mut worst = 0;
+        for signs in 0..8u32 {
+            let mut stack = vec![];
+            let mut current = 0usize;
+            loop {
+                let node = &nodes[current];
+                if node.count() == 0 {
+                    let neg = signs >> node.axis() & 1 == 1;
+                    let (near, far) = if neg {
+                        (node.offset as usize, current + 1)
+                    } else {
+                        (current + 1, node.offset as usize)
+                    };
+                    stack.push(far);
+                    worst = worst.max(stack.len());
+                    current = near;
+                    continue;
+                }
+                match stack.pop() {
+                    Some(n) => current = n,
+                    None => break,
+                }
+            }
+        }
+        assert!(worst <= depth, "stack reached {worst}, depth {depth}");
+        assert!(
+            worst >= depth - 2,
+            "depth {depth} is a loose bound ({worst})"
+        );
+        assert!(depth < STACK_SIZE);
     }
 
     /// The BVH must find exactly what testing every primitive finds.

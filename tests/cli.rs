@@ -156,3 +156,85 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
     assert!(spp >= 1, "no samples kept");
     assert!(dir.join("c.png").exists());
 }
+
+/// Where no adapter exists (simulated by asking wgpu for Metal on Linux), `--backend gpu` is a
+/// clear error with the install line for lavapipe, exit 2, and no output.
+#[test]
+fn gpu_backend_without_an_adapter_is_a_clear_error() {
+    let dir = temp_dir("noadapter");
+    let exr = dir.join("n.exr");
+    let o = hexray()
+        .env("WGPU_BACKEND", "metal")
+        .args([
+            "--backend",
+            "gpu",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+        ])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("apt-get install -y mesa-vulkan-drivers"),
+        "{stderr}"
+    );
+    assert!(!exr.exists());
+}
+
+/// The default backend, `auto`, falls back to the CPU and says so in one line.
+#[test]
+fn auto_backend_falls_back_to_the_cpu_and_says_why() {
+    let dir = temp_dir("auto");
+    let exr = dir.join("a.exr");
+    let o = hexray()
+        .env("WGPU_BACKEND", "metal")
+        .args(["--spp", "1", "--width", "8", "--height", "8", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("backend cpu (auto)"))
+        .unwrap_or_else(|| panic!("{stderr}"));
+    assert!(line.contains("no GPU adapter"), "{line}");
+    let (_, meta) = read_exr(&exr).unwrap();
+    assert_eq!(meta.get("backend"), Some("cpu"));
+}
+
+/// With an adapter (lavapipe in CI), `--backend gpu` renders and records the adapter.
+#[test]
+fn gpu_backend_renders_and_records_its_adapter() {
+    let Some(gpu) = common::gpu() else { return };
+    let dir = temp_dir("gpu");
+    let exr = dir.join("g.exr");
+    let o = hexray()
+        .args([
+            "--backend",
+            "gpu",
+            "--spp",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "-q",
+        ])
+        .arg("--out")
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, meta) = read_exr(&exr).unwrap();
+    assert_eq!(meta.get("backend"), Some("gpu"));
+    assert!(meta.get("device").unwrap().contains(&gpu.info.name));
+    assert_eq!(meta.get("spp"), Some("2"));
+}

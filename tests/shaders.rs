@@ -26,6 +26,7 @@ fn the_kernel_parses_and_validates_with_naga_in_both_residencies() {
         emitters: 2,
         nodes: 31,
         prims: 7,
+        bvh_depth: 5,
     };
     for residency in [Residency::Storage, Residency::Uniform] {
         let src = source(residency, lengths);

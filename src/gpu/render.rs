@@ -123,6 +123,7 @@ pub fn array_lengths(scene: &FlatScene) -> ArrayLengths {
         emitters: scene.emitters.len(),
         nodes: scene.nodes.len(),
         prims: scene.prims.len().div_ceil(4),
+        bvh_depth: crate::bvh::depth(&scene.nodes),
     }
 }
 

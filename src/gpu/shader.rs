@@ -37,7 +37,10 @@ pub fn all_files() -> Vec<&'static str> {
     v
 }
 
-/// Lengths of the scene arrays, written into the uniform bindings' `LEN_*` constants.
+/// What the kernel is specialised to: the lengths of the scene arrays (the uniform bindings'
+/// `LEN_*` constants) and the depth of the BVH (`STACK_SIZE` in bvh.wgsl: a near-first
+/// traversal pushes at most one node per level, and lavapipe keeps the private stack in
+/// registers, so a stack no deeper than the tree runs markedly faster there; docs/gpu.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ArrayLengths {
     pub triangles: usize,
@@ -47,46 +50,48 @@ pub struct ArrayLengths {
     pub nodes: usize,
     /// In vec4<u32>s (four primitive references each).
     pub prims: usize,
+    /// Interior nodes on the longest root-to-leaf path (the traversal stack's high-water mark).
+    pub bvh_depth: usize,
+}
+
+/// Replaces the value of every `const NAME: u32 = ...;` line whose NAME is in `values`.
+fn specialise(text: &str, values: &[(&str, usize)]) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let name = line
+            .strip_prefix("const ")
+            .and_then(|l| l.split(':').next())
+            .unwrap_or("");
+        match values.iter().find(|(n, _)| *n == name) {
+            Some((n, v)) => out.push_str(&format!("const {n}: u32 = {}u;", (*v).max(1))),
+            None => out.push_str(line),
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// The whole renderer as one WGSL module. Each file starts with a comment naming it, so naga's
 /// error positions can be traced back.
 pub fn source(residency: Residency, lengths: ArrayLengths) -> String {
+    let values = [
+        ("LEN_TRIANGLES", lengths.triangles),
+        ("LEN_SPHERES", lengths.spheres),
+        ("LEN_MATERIALS", lengths.materials),
+        ("LEN_EMITTERS", lengths.emitters),
+        ("LEN_NODES", lengths.nodes),
+        ("LEN_PRIMS", lengths.prims),
+        ("STACK_SIZE", lengths.bvh_depth),
+    ];
     let bindings = match residency {
-        Residency::Storage => BINDINGS_STORAGE.1.to_string(),
-        Residency::Uniform => {
-            let mut text = String::new();
-            for line in BINDINGS_UNIFORM.1.lines() {
-                let set = |name: &str, n: usize| format!("const LEN_{name}: u32 = {}u;", n.max(1));
-                let line = match line.split(':').next().unwrap_or("") {
-                    "const LEN_TRIANGLES" => set("TRIANGLES", lengths.triangles),
-                    "const LEN_SPHERES" => set("SPHERES", lengths.spheres),
-                    "const LEN_MATERIALS" => set("MATERIALS", lengths.materials),
-                    "const LEN_EMITTERS" => set("EMITTERS", lengths.emitters),
-                    "const LEN_NODES" => set("NODES", lengths.nodes),
-                    "const LEN_PRIMS" => set("PRIMS", lengths.prims),
-                    _ => line.to_string(),
-                };
-                text.push_str(&line);
-                text.push('\n');
-            }
-            text
-        }
-    };
-    let name = match residency {
-        Residency::Storage => BINDINGS_STORAGE.0,
-        Residency::Uniform => BINDINGS_UNIFORM.0,
+        Residency::Storage => BINDINGS_STORAGE,
+        Residency::Uniform => BINDINGS_UNIFORM,
     };
     let mut s = String::new();
-    let mut push = |name: &str, text: &str| {
+    for (name, text) in [SCENE, bindings].iter().chain(BODY.iter()) {
         s.push_str(&format!("// ---- shaders/{name} ----\n"));
-        s.push_str(text);
+        s.push_str(&specialise(text, &values));
         s.push('\n');
-    };
-    push(SCENE.0, SCENE.1);
-    push(name, &bindings);
-    for (n, t) in BODY {
-        push(n, t);
     }
     s
 }
