@@ -19,6 +19,10 @@ fn max_element(v: vec3<f32>) -> f32 {
 
 // The radiance arriving at pixel (x, y) along one camera sample's path.
 fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
+    // N light samples and one BSDF sample per vertex: Veach's multi-sample MIS weighs each
+    // strategy by n_i · p_i (eq. 9.13), so N enters both weights and divides the NEE sum.
+    let light_samples = max(frame.light_samples, 1u);
+    let n_light = f32(light_samples);
     // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
     let u_camera = draw4(sampler, DIM_CAMERA);
     var ray = camera_ray(frame.camera, x, y, u_camera.x, u_camera.y);
@@ -55,13 +59,13 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
                 radiance += throughput * le;
             } else {
                 let light_pdf = area_to_solid_angle(emitter_pdf_area(hit.prim), hit.t * hit.t, cos_o);
-                radiance += throughput * le * power_heuristic(bsdf_pdf, light_pdf);
+                radiance += throughput * le * power_heuristic(bsdf_pdf, n_light * light_pdf);
             }
         }
 
-        // Step 4 - next-event estimation at diffuse surfaces: choose an emitter triangle by
-        // power and a uniform point on it, trace one shadow ray, and add
-        // f · Le · cos θs / p_ω(light), with p_ω the area pdf converted to solid angle,
+        // Step 4 - next-event estimation at diffuse surfaces: N times, choose an emitter
+        // triangle by power and a uniform point on it, trace one shadow ray, and add
+        // f · Le · cos θs / (N · p_ω(light)), with p_ω the area pdf converted to solid angle,
         // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
         let u_light = draw4(sampler, dim_light(bounce));
         let albedo = material.color;
@@ -72,21 +76,27 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
         }
         if diffuse {
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
-            let ls = sample_emitter(u_light.x, u_light.y, u_light.z);
-            let to_light = ls.p - hit.p;
-            let dist2 = dot(to_light, to_light);
-            let wi = to_light / sqrt(dist2);
-            let cos_s = dot(n_facing, wi);
-            let cos_l = -dot(ls.n, wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray(origin, light_point - origin);
-                if !occluded(shadow, 1.0) {
-                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                    let f = albedo * FRAC_1_PI;
-                    let w = power_heuristic(light_pdf, cos_s * FRAC_1_PI);
-                    radiance += throughput * f * ls.le * (cos_s * w / light_pdf);
+            for (var j = 0u; j < light_samples; j++) {
+                var u = u_light;
+                if j > 0u {
+                    u = draw4(sampler, dim_light_extra(bounce, j));
+                }
+                let ls = sample_emitter(u.x, u.y, u.z);
+                let to_light = ls.p - hit.p;
+                let dist2 = dot(to_light, to_light);
+                let wi = to_light / sqrt(dist2);
+                let cos_s = dot(n_facing, wi);
+                let cos_l = -dot(ls.n, wi);
+                if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+                    let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
+                    let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                    let shadow = Ray(origin, light_point - origin);
+                    if !occluded(shadow, 1.0) {
+                        let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                        let f = albedo * FRAC_1_PI;
+                        let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
+                        radiance += throughput * f * ls.le * (cos_s * w / (n_light * light_pdf));
+                    }
                 }
             }
         }

@@ -31,6 +31,10 @@ fn dim_bsdf(bounce: u32) -> u32 {
     return 2u + 2u * bounce;
 }
 
+fn dim_light_extra(bounce: u32, j: u32) -> u32 {
+    return 0x80000000u + bounce * 256u + j;
+}
+
 struct Sampler {
     seed: u32,
     pixel: u32,

@@ -63,7 +63,9 @@ struct Frame {
     tile_size: vec2<u32>,
     max_bounces: u32,
     specular_scale: f32,
-    pad: vec2<u32>,
+    // Shadow rays per diffuse vertex (`--light-samples`).
+    light_samples: u32,
+    pad: u32,
 }
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).

@@ -59,12 +59,10 @@ impl PixelStats {
             return [0.0; 3];
         }
         let n = self.n as f64;
-        let mut v = [0.0; 3];
-        for c in 0..3 {
+        std::array::from_fn(|c| {
             let ss = self.sum_sq[c] - self.sum[c] * self.sum[c] / n;
-            v[c] = ss.max(0.0) / (n * (n - 1.0));
-        }
-        v
+            ss.max(0.0) / (n * (n - 1.0))
+        })
     }
 }
 

@@ -126,6 +126,8 @@ pub fn intersect_triangle(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
     }
     let t = e2.dot(qvec) * inv_det;
     let t_err = gamma(7) * e2.abs().dot(abs_cross(s, e1)) * inv_det.abs();
+    // Written so that a NaN t (degenerate input) is rejected too.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(t > t_err) {
         return None;
     }

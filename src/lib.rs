@@ -6,6 +6,7 @@
 //! progressively into a [`film::Film`] of per-pixel sums ([`render`], [`cpu`]), and written as
 //! EXR and PNG ([`output`]). [`stats`] holds the statistics the tests and tools share.
 
+pub mod bench;
 pub mod bsdf;
 pub mod bvh;
 pub mod camera;

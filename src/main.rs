@@ -40,11 +40,14 @@ enum Command {
     Render(RenderArgs),
     /// List the GPU adapters wgpu finds, with backend, driver and limits.
     Info,
+    /// Benchmark: each scene on each backend at fixed spp; camera paths/s, rays/s, warm-up apart.
+    Bench(BenchArgs),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
-    /// The GPU when an adapter exists, else the CPU.
+    /// A hardware GPU when wgpu finds one, else the CPU backend (also when the only adapter is a
+    /// software one such as lavapipe, which runs slower on the same cores).
     Auto,
     /// The CPU reference renderer (rayon over tiles).
     Cpu,
@@ -77,6 +80,9 @@ struct RenderArgs {
     /// scene fits, else storage buffers).
     #[arg(long, value_enum)]
     scene_residency: Option<ResidencyChoice>,
+    /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    light_samples: u32,
     /// Samples per pixel. Without --time the default is 64; with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
@@ -110,6 +116,113 @@ struct RenderArgs {
     quiet: bool,
 }
 
+#[derive(Args, Debug, Clone)]
+struct BenchArgs {
+    /// Scene files (default: the three reference scenes).
+    #[arg(default_values_t = [
+        "scenes/tncg15_room.json".to_string(),
+        "scenes/cornell_box.json".to_string(),
+        "scenes/glass_room.json".to_string(),
+    ])]
+    scenes: Vec<String>,
+    /// Backends, comma-separated: cpu, gpu. A gpu row needs an adapter.
+    #[arg(long, value_delimiter = ',', default_values_t = [BenchBackend::Cpu, BenchBackend::Gpu])]
+    backend: Vec<BenchBackend>,
+    /// Use the first GPU adapter whose name contains this.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Samples per pixel of the timed render.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: u32,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: u32,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Shadow rays per diffuse vertex.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    light_samples: u32,
+    /// CPU threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// Where the JSON report goes.
+    #[arg(long, default_value = "out/bench.json")]
+    out: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BenchBackend {
+    Cpu,
+    Gpu,
+}
+
+impl std::fmt::Display for BenchBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BenchBackend::Cpu => "cpu",
+            BenchBackend::Gpu => "gpu",
+        })
+    }
+}
+
+fn bench(args: &BenchArgs) -> Result<ExitCode> {
+    use hexray::bench::{self, Which};
+    for s in &args.scenes {
+        if let Err(e) = Scene::load(std::path::Path::new(s)) {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
+    let backends: Vec<Which> = args
+        .backend
+        .iter()
+        .map(|b| match b {
+            BenchBackend::Cpu => Which::Cpu,
+            BenchBackend::Gpu => Which::Gpu,
+        })
+        .collect();
+    let gpu = if backends.contains(&Which::Gpu) {
+        match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        }
+    } else {
+        None
+    };
+    let config = bench::Config {
+        scenes: args.scenes.iter().map(PathBuf::from).collect(),
+        backends,
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        seed: args.seed,
+        light_samples: args.light_samples,
+        threads: args.threads.map_or_else(
+            || std::thread::available_parallelism().map_or(1, |n| n.get()),
+            |t| t as usize,
+        ),
+    };
+    let report = bench::run(&config, gpu.as_ref(), |row| {
+        eprintln!(
+            "{} on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
+            row.scene,
+            row.device,
+            row.camera_paths_per_second / 1e6,
+            row.seconds,
+            row.spp,
+            row.compile_seconds + row.warmup_seconds
+        );
+    })?;
+    print!("{}", bench::table(&report));
+    output::write_text(&args.out, &serde_json::to_string_pretty(&report)?)?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
 fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
     if v.is_finite() && v > 0.0 {
@@ -124,6 +237,15 @@ fn main() -> ExitCode {
     let args = match cli.command {
         Some(Command::Render(a)) => a,
         Some(Command::Info) => return info(),
+        Some(Command::Bench(b)) => {
+            return match bench(&b) {
+                Ok(code) => code,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         None => cli.render,
     };
     match render(&args) {
@@ -183,7 +305,20 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 return Ok(ExitCode::from(EXIT_BAD_INPUT));
             }
         },
+        // A software adapter (lavapipe) runs the kernel on the very cores the CPU backend uses,
+        // about 5x slower (docs/gpu.md), so `auto` takes it only when asked for by --adapter.
         BackendChoice::Auto => match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) if g.info.device_type == wgpu::DeviceType::Cpu && args.adapter.is_none() => {
+                if !args.quiet {
+                    eprintln!(
+                        "hexray: backend cpu (auto): the only GPU adapter is {}, a software \
+                         rasteriser on these same cores and slower than the CPU backend \
+                         (--backend gpu uses it anyway)",
+                        g.info.name
+                    );
+                }
+                None
+            }
             Ok(g) => {
                 if !args.quiet {
                     eprintln!(
@@ -202,7 +337,11 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         },
     };
     let mut backend: Box<dyn Backend + '_> = match &gpu {
-        None => Box::new(CpuBackend::new(&flat, camera, args.seed, threads)?),
+        None => {
+            let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
+            cpu.light_samples = args.light_samples;
+            Box::new(cpu)
+        }
         Some(g) => {
             let checks = if args.shader_checks {
                 gpu::Checks::Checked
@@ -214,7 +353,8 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
                 None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
             };
-            let renderer = gpu::GpuRenderer::new(
+            let compile = std::time::Instant::now();
+            let mut renderer = gpu::GpuRenderer::new(
                 &g.device,
                 &g.queue,
                 &flat,
@@ -224,6 +364,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 checks,
                 residency,
             )?;
+            renderer.set_light_samples(args.light_samples);
+            if !args.quiet {
+                eprintln!(
+                    "hexray: kernel compiled in {:.2} s ({residency:?} residency, {checks:?}; not part of the render time)",
+                    compile.elapsed().as_secs_f64()
+                );
+            }
             Box::new(gpu::GpuBackend {
                 renderer,
                 adapter: gpu::context::describe(&g.info),
@@ -286,6 +433,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let mut meta = Metadata::default();
     meta.set("spp", report.spp);
     meta.set("seed", args.seed);
+    meta.set("light_samples", args.light_samples);
     meta.set("backend", backend.name());
     meta.set("device", backend.device());
     meta.set("render_seconds", format!("{:.6}", report.seconds));

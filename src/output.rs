@@ -70,6 +70,13 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     result
 }
 
+/// Writes a text file (JSON, CSV) atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, text).with_context(|| format!("writing {}", tmp.display()))
+    })
+}
+
 /// Writes a linear float RGB EXR (32-bit float channels, lossless ZIP) with the metadata as
 /// string attributes.
 pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {

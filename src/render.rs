@@ -109,6 +109,10 @@ pub struct CpuBackend<'a> {
     pub camera: crate::camera::Camera,
     pub seed: u32,
     pub faults: crate::cpu::Faults,
+    /// Shadow rays per diffuse vertex (`--light-samples`, default 1).
+    pub light_samples: u32,
+    /// Rays traced so far (closest-hit and shadow), for the benchmark.
+    pub rays: u64,
     pub pool: rayon::ThreadPool,
 }
 
@@ -127,6 +131,8 @@ impl<'a> CpuBackend<'a> {
             camera,
             seed,
             faults: crate::cpu::Faults::NONE,
+            light_samples: 1,
+            rays: 0,
             pool,
         })
     }
@@ -141,8 +147,19 @@ impl Backend for CpuBackend<'_> {
     }
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
-        self.pool
-            .install(|| crate::cpu::render_pass(scene, camera, seed, first, count, faults, film));
+        let light_samples = self.light_samples;
+        self.rays += self.pool.install(|| {
+            crate::cpu::render_pass(
+                scene,
+                camera,
+                seed,
+                first,
+                count,
+                light_samples,
+                faults,
+                film,
+            )
+        });
         Ok(())
     }
 }

@@ -48,6 +48,19 @@ pub fn dim_light(bounce: u32) -> u32 {
 pub fn dim_bsdf(bounce: u32) -> u32 {
     2 + 2 * bounce
 }
+/// Shadow rays beyond the first (`--light-samples`): block of light sample `j` in 1..256 at
+/// bounce `k`, in the upper half of the block space, so that one light sample per vertex draws
+/// exactly the numbers it always did. (Blocks would collide only past 2^22 bounces, which
+/// Russian roulette with survival ≤ 0.95 makes a probability below 10^-50000.)
+#[inline]
+pub fn dim_light_extra(bounce: u32, j: u32) -> u32 {
+    0x8000_0000u32
+        .wrapping_add(bounce.wrapping_mul(256))
+        .wrapping_add(j)
+}
+/// The most shadow rays per diffuse vertex (`--light-samples`): `j` fits a byte of
+/// [`dim_light_extra`].
+pub const MAX_LIGHT_SAMPLES: u32 = 256;
 
 /// The random stream of one camera sample: (seed, pixel, sample index) fixed, the dimension
 /// block chosen per draw.

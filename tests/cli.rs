@@ -238,3 +238,30 @@ fn gpu_backend_renders_and_records_its_adapter() {
     assert!(meta.get("device").unwrap().contains(&gpu.info.name));
     assert_eq!(meta.get("spp"), Some("2"));
 }
+
+/// `auto` does not pick a software adapter (lavapipe): it runs the kernel on the same cores as
+/// the CPU backend, slower. The line says which adapter it passed over and why.
+#[test]
+fn auto_backend_prefers_the_cpu_backend_over_a_software_adapter() {
+    let Some(g) = common::gpu() else { return };
+    if g.info.device_type != wgpu::DeviceType::Cpu {
+        eprintln!("skipping: the adapter is a hardware GPU");
+        return;
+    }
+    let dir = temp_dir("auto-software");
+    let exr = dir.join("a.exr");
+    let o = hexray()
+        .args(["--spp", "1", "--width", "8", "--height", "8", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("backend cpu (auto)"))
+        .unwrap_or_else(|| panic!("{stderr}"));
+    assert!(line.contains(&g.info.name), "{line}");
+    let (_, meta) = read_exr(&exr).unwrap();
+    assert_eq!(meta.get("backend"), Some("cpu"));
+}

@@ -91,6 +91,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             tile_size,
             max_bounces,
             specular_scale,
+            light_samples,
             pad
         }),
         rust_layout!(PixelSums {

@@ -29,7 +29,9 @@ fn pass_sums_folded_into_f64_keep_the_mean_to_1e_6_at_10_5_spp() {
                 x,
                 y,
                 &Sampler::new(3, y * 64 + x, s),
+                1,
                 Faults::NONE,
+                &mut 0,
             )
             .x
         })

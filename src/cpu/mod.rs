@@ -18,42 +18,58 @@ pub const TILE: u32 = 16;
 ///
 /// Each pixel's samples are added in sample order by one thread, whatever the thread count or
 /// the split into passes, so an image is bit-identical for any `--threads` and pass schedule.
+/// Returns the number of rays traced.
+#[allow(clippy::too_many_arguments)]
 pub fn render_pass(
     scene: &FlatScene,
     camera: &Camera,
     seed: u32,
     first: u32,
     count: u32,
+    light_samples: u32,
     faults: Faults,
     film: &mut Film,
-) {
+) -> u64 {
     let (w, h) = (film.width, film.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
         .collect();
     let pixels = &film.pixels;
-    let updated: Vec<Vec<(usize, crate::film::PixelStats)>> = tiles
+    let updated: Vec<(Vec<(usize, crate::film::PixelStats)>, u64)> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
             let mut out = Vec::with_capacity((TILE * TILE) as usize);
+            let mut rays = 0u64;
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let index = (y * w + x) as usize;
                     let mut stats = pixels[index];
                     for s in first..first + count {
                         let sampler = Sampler::new(seed, index as u32, s);
-                        stats.add(trace_path(scene, camera, x, y, &sampler, faults));
+                        stats.add(trace_path(
+                            scene,
+                            camera,
+                            x,
+                            y,
+                            &sampler,
+                            light_samples,
+                            faults,
+                            &mut rays,
+                        ));
                     }
                     out.push((index, stats));
                 }
             }
-            out
+            (out, rays)
         })
         .collect();
-    for tile in updated {
+    let mut rays = 0;
+    for (tile, tile_rays) in updated {
         for (index, stats) in tile {
             film.pixels[index] = stats;
         }
+        rays += tile_rays;
     }
+    rays
 }

@@ -17,7 +17,7 @@ use crate::camera::Camera;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::sampling::{dim_bsdf, dim_light, power_heuristic, Sampler, DIM_CAMERA};
+use crate::sampling::{dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -52,15 +52,23 @@ impl Default for Faults {
     }
 }
 
-/// The radiance arriving at pixel (x, y) along one camera sample's path.
+/// The radiance arriving at pixel (x, y) along one camera sample's path, with `light_samples`
+/// shadow rays at every diffuse vertex (1 is the default; see step 4). `rays` counts the rays
+/// traced (closest-hit and shadow), for the benchmark's rays/s.
+#[allow(clippy::too_many_arguments)]
 pub fn trace_path(
     scene: &FlatScene,
     camera: &Camera,
     x: u32,
     y: u32,
     sampler: &Sampler,
+    light_samples: u32,
     faults: Faults,
+    rays: &mut u64,
 ) -> Vec3 {
+    // N light samples and one BSDF sample per vertex: Veach's multi-sample MIS weighs each
+    // strategy by n_i · p_i (eq. 9.13), so N enters both weights and divides the NEE sum.
+    let n_light = light_samples.max(1) as f32;
     // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
     let u_camera = sampler.draw4(DIM_CAMERA);
     let mut ray = camera.ray(x, y, u_camera[0], u_camera[1]);
@@ -78,6 +86,7 @@ pub fn trace_path(
     loop {
         // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
         // outside the scene, so a miss ends the path.
+        *rays += 1;
         let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
             break;
         };
@@ -96,13 +105,13 @@ pub fn trace_path(
             } else {
                 let light_pdf =
                     area_to_solid_angle(emitter_pdf_area(scene, hit.prim), hit.t * hit.t, cos_o);
-                radiance += throughput * le * power_heuristic(bsdf_pdf, light_pdf);
+                radiance += throughput * le * power_heuristic(bsdf_pdf, n_light * light_pdf);
             }
         }
 
-        // Step 4 - next-event estimation at diffuse surfaces: choose an emitter triangle by
-        // power and a uniform point on it, trace one shadow ray, and add
-        // f · Le · cos θs / p_ω(light), with p_ω the area pdf converted to solid angle,
+        // Step 4 - next-event estimation at diffuse surfaces: N times, choose an emitter
+        // triangle by power and a uniform point on it, trace one shadow ray, and add
+        // f · Le · cos θs / (N · p_ω(light)), with p_ω the area pdf converted to solid angle,
         // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
         let u_light = sampler.draw4(dim_light(bounce));
         let albedo = Vec3::from(material.color);
@@ -114,24 +123,32 @@ pub fn trace_path(
         }
         if diffuse {
             let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
-            let ls = sample_emitter(scene, u_light[0], u_light[1], u_light[2]);
-            let to_light = ls.p - hit.p;
-            let dist2 = to_light.length_squared();
-            let wi = to_light / dist2.sqrt();
-            let cos_s = n_facing.dot(wi);
-            let cos_l = -ls.n.dot(wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray {
-                    o: origin,
-                    d: light_point - origin,
+            for j in 0..light_samples.max(1) {
+                let u = if j == 0 {
+                    u_light
+                } else {
+                    sampler.draw4(dim_light_extra(bounce, j))
                 };
-                if !occluded(scene, &shadow, 1.0) {
-                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                    let f = albedo * FRAC_1_PI;
-                    let w = power_heuristic(light_pdf, cos_s * FRAC_1_PI);
-                    radiance += throughput * f * ls.le * (cos_s * w / light_pdf);
+                let ls = sample_emitter(scene, u[0], u[1], u[2]);
+                let to_light = ls.p - hit.p;
+                let dist2 = to_light.length_squared();
+                let wi = to_light / dist2.sqrt();
+                let cos_s = n_facing.dot(wi);
+                let cos_l = -ls.n.dot(wi);
+                if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+                    let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
+                    let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                    let shadow = Ray {
+                        o: origin,
+                        d: light_point - origin,
+                    };
+                    *rays += 1;
+                    if !occluded(scene, &shadow, 1.0) {
+                        let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                        let f = albedo * FRAC_1_PI;
+                        let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
+                        radiance += throughput * f * ls.le * (cos_s * w / (n_light * light_pdf));
+                    }
                 }
             }
         }

@@ -27,7 +27,9 @@ pub struct Frame {
     pub tile_size: [u32; 2],
     pub max_bounces: u32,
     pub specular_scale: f32,
-    pub pad: [u32; 2],
+    /// Shadow rays per diffuse vertex (`--light-samples`, at least 1).
+    pub light_samples: u32,
+    pub pad: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -188,6 +190,7 @@ fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindG
 }
 
 impl GpuRenderer {
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -254,7 +257,8 @@ impl GpuRenderer {
             tile_size: [width, height],
             max_bounces: faults.max_bounces,
             specular_scale: faults.specular_scale,
-            pad: [0; 2],
+            light_samples: 1,
+            pad: 0,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -358,6 +362,11 @@ impl GpuRenderer {
             bail!("the GPU device was lost ({})", self.lost.1.lock().unwrap());
         }
         Ok(())
+    }
+
+    /// Shadow rays per diffuse vertex (`--light-samples`; 1 unless set).
+    pub fn set_light_samples(&mut self, n: u32) {
+        self.frame.light_samples = n.max(1);
     }
 
     /// Adds samples `first..first + count` of every pixel to `film`. The samples are split into

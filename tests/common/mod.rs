@@ -22,10 +22,32 @@ pub fn load(rel: &str) -> (Scene, FlatScene) {
 
 /// Renders `spp` samples per pixel of a scene file on the CPU backend (all cores).
 pub fn render_cpu(rel: &str, width: u32, height: u32, spp: u32, seed: u32, faults: Faults) -> Film {
+    render_cpu_light_samples(rel, width, height, spp, seed, 1, faults)
+}
+
+/// [`render_cpu`] with `light_samples` shadow rays per diffuse vertex.
+pub fn render_cpu_light_samples(
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    light_samples: u32,
+    faults: Faults,
+) -> Film {
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
-    render_pass(&flat, &camera, seed, 0, spp, faults, &mut film);
+    render_pass(
+        &flat,
+        &camera,
+        seed,
+        0,
+        spp,
+        light_samples,
+        faults,
+        &mut film,
+    );
     film
 }
 
@@ -84,6 +106,21 @@ pub fn render_gpu(
     seed: u32,
     faults: Faults,
 ) -> Film {
+    render_gpu_light_samples(gpu, rel, width, height, spp, seed, 1, faults)
+}
+
+/// [`render_gpu`] with `light_samples` shadow rays per diffuse vertex.
+#[allow(clippy::too_many_arguments)]
+pub fn render_gpu_light_samples(
+    gpu: &hexray::gpu::Gpu,
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    light_samples: u32,
+    faults: Faults,
+) -> Film {
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut r = hexray::gpu::GpuRenderer::new(
@@ -97,6 +134,7 @@ pub fn render_gpu(
         hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
     )
     .unwrap();
+    r.set_light_samples(light_samples);
     let mut film = Film::new(width, height);
     r.render(0, spp, &mut film).unwrap();
     film
