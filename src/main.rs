@@ -367,7 +367,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             renderer.set_light_samples(args.light_samples);
             if !args.quiet {
                 eprintln!(
-                    "hexray: kernel compiled in {:.2} s ({residency:?} residency, {checks:?}; not part of the render time)",
+                    "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
                     compile.elapsed().as_secs_f64()
                 );
             }
