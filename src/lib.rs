@@ -16,6 +16,7 @@ pub mod flat;
 pub mod geometry;
 pub mod gpu;
 pub mod light;
+pub mod merge;
 pub mod output;
 pub mod render;
 pub mod sampling;

@@ -40,6 +40,8 @@ enum Command {
     Render(RenderArgs),
     /// List the GPU adapters wgpu finds, with backend, driver and limits.
     Info,
+    /// Merge renders of one scene made with different seeds into one (spp-weighted).
+    Merge(MergeArgs),
     /// Benchmark: each scene on each backend at fixed spp; camera paths/s, rays/s, warm-up apart.
     Bench(BenchArgs),
 }
@@ -114,6 +116,63 @@ struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     quiet: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+struct MergeArgs {
+    /// The parts: EXRs written by `hexray render --variance --seed S`, each with NAME_var.exr.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// The merged EXR; NAME.png and NAME_var.exr are written beside it.
+    #[arg(short, long)]
+    out: PathBuf,
+    /// Exposure of the PNG in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn merge(args: &MergeArgs) -> Result<ExitCode> {
+    if args.out.extension().is_none_or(|e| e != "exr") {
+        eprintln!(
+            "error: -o {}: the output must be an .exr path (the PNG is written beside it)",
+            args.out.display()
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    // Every part is read and checked before anything is written.
+    let parts = match args
+        .parts
+        .iter()
+        .map(|p| hexray::merge::load_part(p))
+        .collect::<Result<Vec<_>, _>>()
+        .and_then(hexray::merge::merge)
+    {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    let (exr, png, var) = output::output_paths(&args.out);
+    output::write_exr(&exr, &parts.mean, &parts.meta)?;
+    output::write_png(&png, &parts.mean, args.exposure)?;
+    let mut vmeta = parts.meta.clone();
+    vmeta.set("content", "variance of the pixel mean");
+    output::write_exr(&var, &parts.var, &vmeta)?;
+    if !args.quiet {
+        eprintln!(
+            "merged {} parts (seeds {}) into {} spp: wrote {}, {} and {}",
+            parts.meta.get("parts").unwrap_or("?"),
+            parts.meta.get("seeds").unwrap_or("?"),
+            parts.meta.get("spp").unwrap_or("?"),
+            exr.display(),
+            png.display(),
+            var.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[derive(Args, Debug, Clone)]
@@ -237,6 +296,15 @@ fn main() -> ExitCode {
     let args = match cli.command {
         Some(Command::Render(a)) => a,
         Some(Command::Info) => return info(),
+        Some(Command::Merge(m)) => {
+            return match merge(&m) {
+                Ok(code) => code,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Some(Command::Bench(b)) => {
             return match bench(&b) {
                 Ok(code) => code,

@@ -24,6 +24,9 @@ impl Metadata {
     }
 }
 
+/// The EXR attribute that holds the render's metadata.
+pub const METADATA_ATTRIBUTE: &str = "hexray";
+
 /// A linear RGB image in memory, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
@@ -77,8 +80,10 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
     })
 }
 
-/// Writes a linear float RGB EXR (32-bit float channels, lossless ZIP) with the metadata as
-/// string attributes.
+/// Writes a linear float RGB EXR (32-bit float channels, lossless ZIP) with the metadata as one
+/// string attribute `hexray`, a `key=value` line per field in key order. (One attribute, not one
+/// per key: the exr crate keeps custom attributes in a randomly seeded `HashMap` and writes them
+/// in its iteration order, so several would make the same image a different file each time.)
 pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {
     write_atomically(path, |tmp| {
         let (w, h) = (image.width, image.height);
@@ -89,12 +94,15 @@ pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {
         });
         let mut attrs = LayerAttributes::named("hexray");
         attrs.software_name = Some(Text::from(concat!("hexray ", env!("CARGO_PKG_VERSION"))));
-        for (k, v) in &meta.fields {
-            attrs.other.insert(
-                Text::from(format!("hexray:{k}").as_str()),
-                exr::meta::attribute::AttributeValue::Text(Text::from(v.as_str())),
-            );
-        }
+        let lines: String = meta
+            .fields
+            .iter()
+            .map(|(k, v)| format!("{k}={}\n", v.replace('\n', " ")))
+            .collect();
+        attrs.other.insert(
+            Text::from(METADATA_ATTRIBUTE),
+            exr::meta::attribute::AttributeValue::Text(Text::from(lines.as_str())),
+        );
         let layer = Layer::new((w, h), attrs, Encoding::SMALL_LOSSLESS, channels);
         Image::from_layer(layer)
             .write()
@@ -120,11 +128,14 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
     .with_context(|| format!("reading {}", path.display()))?;
     let mut meta = Metadata::default();
     for (k, v) in &image.layer_data.attributes.other {
-        let key = k.to_string();
-        if let (Some(key), exr::meta::attribute::AttributeValue::Text(t)) =
-            (key.strip_prefix("hexray:"), v)
+        if let (METADATA_ATTRIBUTE, exr::meta::attribute::AttributeValue::Text(t)) =
+            (k.to_string().as_str(), v)
         {
-            meta.set(key, t.to_string());
+            for line in t.to_string().lines() {
+                if let Some((key, value)) = line.split_once('=') {
+                    meta.set(key, value);
+                }
+            }
         }
     }
     Ok((image.layer_data.channel_data.pixels, meta))
