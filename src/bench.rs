@@ -91,36 +91,15 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
         let rays_per_path = probe.rays as f64 / paths(probe_spp);
 
         for &which in &config.backends {
-            let compile = Instant::now();
-            let mut backend: Box<dyn Backend + '_> = match which {
-                Which::Cpu => {
-                    let mut b = CpuBackend::new(&flat, camera, config.seed, config.threads)?;
-                    b.light_samples = config.light_samples;
-                    Box::new(b)
-                }
-                Which::Gpu => {
-                    let g = gpu.context("a GPU row needs a GPU adapter")?;
-                    let mut renderer = GpuRenderer::new(
-                        &g.device,
-                        &g.queue,
-                        &flat,
-                        camera,
-                        config.seed,
-                        Faults::NONE,
-                        Checks::Unchecked,
-                        Residency::preferred(&g.info, &g.device.limits(), &flat),
-                    )?;
-                    renderer.set_light_samples(config.light_samples);
-                    Box::new(crate::gpu::GpuBackend {
-                        renderer,
-                        adapter: crate::gpu::context::describe(&g.info),
-                    })
-                }
-            };
-            let compile_seconds = match which {
-                Which::Cpu => 0.0,
-                Which::Gpu => compile.elapsed().as_secs_f64(),
-            };
+            let (mut backend, compile_seconds) = make_backend(
+                which,
+                &flat,
+                camera,
+                config.seed,
+                config.light_samples,
+                config.threads,
+                gpu,
+            )?;
             let warm = Instant::now();
             backend.pass(0, 1, &mut Film::new(config.width, config.height))?;
             let warmup_seconds = warm.elapsed().as_secs_f64();
@@ -156,6 +135,46 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
         date_utc: utc_date(),
         machine: machine(),
         rows,
+    })
+}
+
+/// A backend of either kind with the CLI's defaults (unchecked kernel, preferred residency),
+/// and the seconds spent building it (the GPU kernel's compilation; 0 for the CPU).
+pub fn make_backend<'a>(
+    which: Which,
+    flat: &'a FlatScene,
+    camera: Camera,
+    seed: u32,
+    light_samples: u32,
+    threads: usize,
+    gpu: Option<&Gpu>,
+) -> Result<(Box<dyn Backend + 'a>, f64)> {
+    let start = Instant::now();
+    Ok(match which {
+        Which::Cpu => {
+            let mut b = CpuBackend::new(flat, camera, seed, threads)?;
+            b.light_samples = light_samples;
+            (Box::new(b), 0.0)
+        }
+        Which::Gpu => {
+            let g = gpu.context("the GPU backend needs a GPU adapter")?;
+            let mut renderer = GpuRenderer::new(
+                &g.device,
+                &g.queue,
+                flat,
+                camera,
+                seed,
+                Faults::NONE,
+                Checks::Unchecked,
+                Residency::preferred(&g.info, &g.device.limits(), flat),
+            )?;
+            renderer.set_light_samples(light_samples);
+            let b = crate::gpu::GpuBackend {
+                renderer,
+                adapter: crate::gpu::context::describe(&g.info),
+            };
+            (Box::new(b), start.elapsed().as_secs_f64())
+        }
     })
 }
 

@@ -40,6 +40,12 @@ enum Command {
     Render(RenderArgs),
     /// List the GPU adapters wgpu finds, with backend, driver and limits.
     Info,
+    /// Render a high-spp reference: an EXR and its variance EXR (default out/<name>_ref.exr).
+    Reference(RenderArgs),
+    /// Compare a render with a reference: means, ratio, RMSE, relMSE, z-scores.
+    Compare(CompareArgs),
+    /// Error against time: relMSE after each doubling of spp, per backend, as CSV and charts.
+    Curve(CurveArgs),
     /// Merge renders of one scene made with different seeds into one (spp-weighted).
     Merge(MergeArgs),
     /// Benchmark: each scene on each backend at fixed spp; camera paths/s, rays/s, warm-up apart.
@@ -116,6 +122,255 @@ struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     quiet: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+struct CompareArgs {
+    /// The render to judge (.exr or .npy).
+    candidate: PathBuf,
+    /// The reference (.exr or .npy).
+    reference: PathBuf,
+    /// The candidate's variance of the mean (default: CANDIDATE's NAME_var.exr when it exists).
+    #[arg(long)]
+    var: Option<PathBuf>,
+    /// The reference's variance of the mean (default: REFERENCE's NAME_var.exr / NAME_var.npy
+    /// when it exists).
+    #[arg(long)]
+    ref_var: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// NAME_var.EXT beside NAME.EXT, if that file exists.
+fn variance_beside(path: &std::path::Path) -> Option<PathBuf> {
+    let stem = path.file_stem()?.to_string_lossy();
+    let ext = path.extension()?.to_string_lossy();
+    let v = path.with_file_name(format!("{stem}_var.{ext}"));
+    v.exists().then_some(v)
+}
+
+fn compare(args: &CompareArgs) -> ExitCode {
+    let read = |p: &PathBuf| hexray::compare::read_image(p);
+    let var = args
+        .var
+        .clone()
+        .or_else(|| variance_beside(&args.candidate));
+    let ref_var = args
+        .ref_var
+        .clone()
+        .or_else(|| variance_beside(&args.reference));
+    let result = (|| -> Result<_> {
+        let c = read(&args.candidate)?;
+        let r = read(&args.reference)?;
+        let vars = match (&var, &ref_var) {
+            (Some(a), Some(b)) => Some((read(a)?, read(b)?)),
+            _ => None,
+        };
+        hexray::compare::compare(&c, &r, vars.as_ref().map(|(a, b)| (a, b))).with_context(|| {
+            format!(
+                "comparing {} with {}",
+                args.candidate.display(),
+                args.reference.display()
+            )
+        })
+    })();
+    match result {
+        Ok(cmp) => {
+            if args.json {
+                println!("{}", serde_json::to_string(&cmp).unwrap());
+            } else {
+                print!("{}", cmp.text());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+struct CurveArgs {
+    /// Scene file (JSON).
+    scene: PathBuf,
+    /// The reference image (.exr or .npy); its size is the curve's resolution.
+    #[arg(long)]
+    reference: PathBuf,
+    /// Backends, comma-separated: cpu, gpu.
+    #[arg(long, value_delimiter = ',', default_values_t = [BenchBackend::Cpu])]
+    backend: Vec<BenchBackend>,
+    /// Use the first GPU adapter whose name contains this.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Render-time budget per series, in seconds.
+    #[arg(long, value_parser = parse_seconds, default_value = "10")]
+    time: f64,
+    /// Shadow rays per diffuse vertex; a comma-separated list gives one series per value.
+    #[arg(long, value_delimiter = ',', default_values_t = [1u32])]
+    light_samples: Vec<u32>,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// CPU threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// Another renderer's curve to overlay (CSV: scene,variant,spp,seconds,rmse,relmse).
+    #[arg(long)]
+    overlay: Option<PathBuf>,
+    /// The overlay rows to use (default: the scene's name).
+    #[arg(long)]
+    overlay_scene: Option<String>,
+    /// The overlaid renderer's name in the legend.
+    #[arg(long, default_value = "mitsuba")]
+    overlay_name: String,
+    /// Output directory: curve.csv, relmse_vs_seconds.{png,svg}, relmse_vs_spp.{png,svg}.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn curve(args: &CurveArgs) -> Result<ExitCode> {
+    use hexray::bench::{make_backend, Which};
+    use hexray::chart::{relmse_chart, XAxis};
+    let scene = match Scene::load(&args.scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    let reference = match hexray::compare::read_image(&args.reference) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: --reference: {e:#}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    if let Some(&n) = args
+        .light_samples
+        .iter()
+        .find(|&&n| n == 0 || n > hexray::sampling::MAX_LIGHT_SAMPLES)
+    {
+        eprintln!(
+            "error: --light-samples {n}: give 1 to {}",
+            hexray::sampling::MAX_LIGHT_SAMPLES
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    let mut overlay = Vec::new();
+    if let Some(o) = &args.overlay {
+        let name = args
+            .overlay_scene
+            .clone()
+            .unwrap_or(scene.desc.name.clone());
+        overlay = match hexray::curve::read_overlay(o, &name, &args.overlay_name) {
+            Ok(v) => v,
+            Err(e) => {
+                eprintln!("error: --overlay: {e:#}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        };
+        if overlay.is_empty() {
+            eprintln!(
+                "error: --overlay {}: no rows for scene `{name}` (choose with --overlay-scene)",
+                o.display()
+            );
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
+    let wants_gpu = args.backend.contains(&BenchBackend::Gpu);
+    let gpu = if wants_gpu {
+        match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        }
+    } else {
+        None
+    };
+    let (w, h) = (reference.width as u32, reference.height as u32);
+    let flat = FlatScene::build(&scene);
+    let camera = Camera::new(&scene.desc.camera, w, h);
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        |t| t as usize,
+    );
+    let mut points = Vec::new();
+    let mut devices = Vec::new();
+    for b in &args.backend {
+        for &n in &args.light_samples {
+            let which = match b {
+                BenchBackend::Cpu => Which::Cpu,
+                BenchBackend::Gpu => Which::Gpu,
+            };
+            let (mut backend, compile) =
+                make_backend(which, &flat, camera, args.seed, n, threads, gpu.as_ref())?;
+            devices.push(format!("{}: {}", backend.name(), backend.device()));
+            let (mut series, warmup) = hexray::curve::measure(
+                &scene.desc.name,
+                backend.as_mut(),
+                w,
+                h,
+                &reference,
+                args.time,
+                |p| {
+                    eprintln!(
+                        "{} {:>6} spp {:>9.3} s  RMSE {:.4e}  relMSE {:.4e}",
+                        p.backend, p.spp, p.seconds, p.rmse, p.relmse
+                    )
+                },
+            )?;
+            eprintln!(
+                "{}: kernel build {compile:.2} s, warm-up pass {warmup:.2} s (not counted)",
+                backend.name()
+            );
+            if args.light_samples.len() > 1 {
+                for p in &mut series {
+                    p.backend = format!(
+                        "{}, {n} shadow ray{}",
+                        p.backend,
+                        if n == 1 { "" } else { "s" }
+                    );
+                }
+            }
+            points.extend(series);
+        }
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    output::write_text(&args.out.join("curve.csv"), &hexray::curve::csv(&points))?;
+    let mut all = points.clone();
+    all.extend(overlay);
+    let caption = format!(
+        "{}x{} · {} · {} · {}",
+        w,
+        h,
+        hexray::bench::machine(),
+        devices.join("; "),
+        hexray::bench::utc_date()
+    );
+    let title = format!("{}: relMSE against", scene.desc.name);
+    relmse_chart(
+        &all,
+        XAxis::Seconds,
+        &format!("{title} render time"),
+        &caption,
+        &args.out.join("relmse_vs_seconds"),
+    )?;
+    relmse_chart(
+        &all,
+        XAxis::Spp,
+        &format!("{title} samples per pixel"),
+        &caption,
+        &args.out.join("relmse_vs_spp"),
+    )?;
+    eprintln!(
+        "wrote {}/curve.csv, relmse_vs_seconds.png/.svg, relmse_vs_spp.png/.svg",
+        args.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 #[derive(Args, Debug, Clone)]
@@ -296,6 +551,31 @@ fn main() -> ExitCode {
     let args = match cli.command {
         Some(Command::Render(a)) => a,
         Some(Command::Info) => return info(),
+        Some(Command::Compare(c)) => return compare(&c),
+        Some(Command::Curve(c)) => {
+            return match curve(&c) {
+                Ok(code) => code,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Some(Command::Reference(mut r)) => {
+            // A reference is a render with its variance, a long default and its own name.
+            r.variance = true;
+            if r.spp.is_none() && r.time.is_none() {
+                r.spp = Some(1024);
+            }
+            if r.out.is_none() {
+                let stem = r
+                    .scene
+                    .file_stem()
+                    .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+                r.out = Some(PathBuf::from("out").join(format!("{stem}_ref.exr")));
+            }
+            r
+        }
         Some(Command::Merge(m)) => {
             return match merge(&m) {
                 Ok(code) => code,

@@ -73,6 +73,21 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     result
 }
 
+/// Writes 8-bit RGB pixels (row 0 at the top) as a PNG, atomically.
+pub fn write_rgb8_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            rgb,
+            width,
+            height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .with_context(|| format!("writing {}", tmp.display()))
+    })
+}
+
 /// Writes a text file (JSON, CSV) atomically.
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomically(path, |tmp| {

@@ -1,0 +1,171 @@
+//! Charts of error against time and against samples (plotters), as PNG and SVG. Text is drawn
+//! with a bundled font (DejaVu Sans, `assets/fonts/`), so no system font library is needed.
+
+use crate::curve::Point;
+use crate::output::{write_rgb8_png, write_text};
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+const SIZE: (u32, u32) = (900, 600);
+/// Distinguishable line colours (Okabe and Ito's colour-blind-safe set).
+const PALETTE: [RGBColor; 7] = [
+    RGBColor(213, 94, 0),
+    RGBColor(0, 114, 178),
+    RGBColor(0, 158, 115),
+    RGBColor(230, 159, 0),
+    RGBColor(204, 121, 167),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+];
+
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // The bytes are a valid TrueType font, checked by `charts_decode_as_images`.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// Which quantity goes on the x axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum XAxis {
+    Seconds,
+    Spp,
+}
+
+/// Draws relMSE against seconds or spp, log-log, one line per series (in order of first
+/// appearance), with `caption` under the title; writes `stem.png` and `stem.svg`.
+pub fn relmse_chart(
+    points: &[Point],
+    x: XAxis,
+    title: &str,
+    caption: &str,
+    stem: &Path,
+) -> Result<()> {
+    register_font();
+    let mut series: Vec<Series> = Vec::new();
+    for p in points {
+        let xv = match x {
+            XAxis::Seconds => p.seconds,
+            XAxis::Spp => p.spp as f64,
+        };
+        if !(xv > 0.0 && p.relmse > 0.0) {
+            continue;
+        }
+        match series.iter_mut().find(|(n, _)| *n == p.backend) {
+            Some((_, v)) => v.push((xv, p.relmse)),
+            None => series.push((p.backend.clone(), vec![(xv, p.relmse)])),
+        }
+    }
+    let all = series.iter().flat_map(|(_, v)| v.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(a, b) in all {
+        (x0, x1, y0, y1) = (x0.min(a), x1.max(a), y0.min(b), y1.max(b));
+    }
+    if x0 > x1 {
+        return Err(anyhow!(
+            "nothing to chart: no point with positive x and relMSE"
+        ));
+    }
+    let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 1.5, y1 * 1.5);
+    let x_label = match x {
+        XAxis::Seconds => "render time (s, after warm-up)",
+        XAxis::Spp => "samples per pixel",
+    };
+
+    let bounds = (x0, x1, y0, y1);
+    let mut pixels = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    draw(
+        BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area(),
+        &series,
+        bounds,
+        title,
+        caption,
+        x_label,
+    )?;
+    write_rgb8_png(&stem.with_extension("png"), SIZE.0, SIZE.1, &pixels)?;
+    let mut svg = String::new();
+    draw(
+        SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(),
+        &series,
+        bounds,
+        title,
+        caption,
+        x_label,
+    )?;
+    write_text(&stem.with_extension("svg"), &svg)?;
+    Ok(())
+}
+
+type Series = (String, Vec<(f64, f64)>);
+
+#[allow(clippy::too_many_arguments)]
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    series: &[Series],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    title: &str,
+    caption: &str,
+    x_label: &str,
+) -> Result<()> {
+    root.fill(&WHITE).map_err(|e| anyhow!("{e:?}"))?;
+    let (top, rest) = root.split_vertically(64);
+    top.draw(&Text::new(
+        title.to_string(),
+        (20, 8),
+        ("sans-serif", 22).into_font(),
+    ))
+    .map_err(|e| anyhow!("{e:?}"))?;
+    top.draw(&Text::new(
+        caption.to_string(),
+        (20, 38),
+        ("sans-serif", 14).into_font().color(&RGBColor(80, 80, 80)),
+    ))
+    .map_err(|e| anyhow!("{e:?}"))?;
+    let mut chart = ChartBuilder::on(&rest)
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .map_err(|e| anyhow!("{e:?}"))?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc("relMSE")
+        .label_style(("sans-serif", 14))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| {
+            if *v >= 1.0 {
+                format!("{v:.0}")
+            } else {
+                format!("{v:.2}")
+            }
+        })
+        .draw()
+        .map_err(|e| anyhow!("{e:?}"))?;
+    for (i, (name, pts)) in series.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()].to_rgba();
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+            .map_err(|e| anyhow!("{e:?}"))?
+            .label(name.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+            .map_err(|e| anyhow!("{e:?}"))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| anyhow!("{e:?}"))?;
+    root.present().map_err(|e| anyhow!("{e:?}"))?;
+    Ok(())
+}

@@ -1,0 +1,139 @@
+//! Comparing a render with a reference, with the metrics Mitsuba and pbrt report: the ratio of
+//! image means, RMSE = sqrt(mean (x − r)²), relMSE = mean (x − r)² / (r² + 0.01), and, when
+//! both variances of the mean are known, the fraction of pixel-channels beyond 5 standard errors
+//! (|x − r| > 5 sqrt(var_x + var_r)) and the mean z². Means over all pixel-channels.
+
+use crate::output::{read_exr, read_npy_rgb, RgbImage};
+use anyhow::{bail, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// The relMSE denominator's offset: keeps dark pixels from dominating (pbrt, Mitsuba).
+pub const RELMSE_EPSILON: f64 = 0.01;
+
+/// What `compare` reports.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Comparison {
+    pub width: usize,
+    pub height: usize,
+    pub candidate_mean: [f64; 3],
+    pub reference_mean: [f64; 3],
+    /// candidate mean / reference mean, per channel.
+    pub ratio: [f64; 3],
+    pub rmse: f64,
+    pub relmse: f64,
+    /// With both variances: the fraction of pixel-channels with |z| > 5.
+    pub beyond_5_se: Option<f64>,
+    /// With both variances: the mean of z² (1 for a correct pair with correct variances).
+    pub mean_z2: Option<f64>,
+}
+
+/// Reads an RGB image by extension: `.exr` (linear float) or `.npy` (float32/64, H x W x 3).
+pub fn read_image(path: &Path) -> Result<RgbImage> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("exr") => Ok(read_exr(path)?.0),
+        Some("npy") => read_npy_rgb(path),
+        _ => bail!(
+            "{}: unknown image type; give an .exr or a .npy file",
+            path.display()
+        ),
+    }
+}
+
+/// The error metrics of a candidate against a reference, computed in f64.
+pub fn compare(
+    candidate: &RgbImage,
+    reference: &RgbImage,
+    variances: Option<(&RgbImage, &RgbImage)>,
+) -> Result<Comparison> {
+    let size = |i: &RgbImage| (i.width, i.height);
+    if size(candidate) != size(reference) {
+        bail!(
+            "the candidate is {}x{} but the reference is {}x{}",
+            candidate.width,
+            candidate.height,
+            reference.width,
+            reference.height
+        );
+    }
+    if let Some((vc, vr)) = variances {
+        if size(vc) != size(candidate) || size(vr) != size(reference) {
+            bail!(
+                "a variance image's size ({}x{}, {}x{}) differs from its image's ({}x{})",
+                vc.width,
+                vc.height,
+                vr.width,
+                vr.height,
+                candidate.width,
+                candidate.height
+            );
+        }
+    }
+    let n = candidate.pixels.len() as f64;
+    let (mut mc, mut mr) = ([0.0f64; 3], [0.0f64; 3]);
+    let (mut se, mut rel) = (0.0f64, 0.0f64);
+    for (x, r) in candidate.pixels.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            let (x, r) = (x[c] as f64, r[c] as f64);
+            mc[c] += x / n;
+            mr[c] += r / n;
+            se += (x - r).powi(2);
+            rel += (x - r).powi(2) / (r * r + RELMSE_EPSILON);
+        }
+    }
+    let (mut beyond, mut z2) = (None, None);
+    if let Some((vc, vr)) = variances {
+        let (mut b, mut z) = (0usize, 0.0f64);
+        for i in 0..candidate.pixels.len() {
+            for c in 0..3 {
+                let d = candidate.pixels[i][c] as f64 - reference.pixels[i][c] as f64;
+                let v = vc.pixels[i][c] as f64 + vr.pixels[i][c] as f64;
+                let zz = if v > 0.0 {
+                    d * d / v
+                } else if d == 0.0 {
+                    0.0
+                } else {
+                    f64::INFINITY
+                };
+                z += zz;
+                if zz > 25.0 {
+                    b += 1;
+                }
+            }
+        }
+        beyond = Some(b as f64 / (3.0 * n));
+        z2 = Some(z / (3.0 * n));
+    }
+    Ok(Comparison {
+        width: candidate.width,
+        height: candidate.height,
+        candidate_mean: mc,
+        reference_mean: mr,
+        ratio: std::array::from_fn(|c| mc[c] / mr[c]),
+        rmse: (se / (3.0 * n)).sqrt(),
+        relmse: rel / (3.0 * n),
+        beyond_5_se: beyond,
+        mean_z2: z2,
+    })
+}
+
+impl Comparison {
+    /// A human-readable report.
+    pub fn text(&self) -> String {
+        let rgb = |v: [f64; 3]| format!("{:.5} {:.5} {:.5}", v[0], v[1], v[2]);
+        let mut s = format!(
+            "size           {}x{}\ncandidate mean {}\nreference mean {}\nratio          {}\nRMSE           {:.4e}\nrelMSE         {:.4e}\n",
+            self.width,
+            self.height,
+            rgb(self.candidate_mean),
+            rgb(self.reference_mean),
+            rgb(self.ratio),
+            self.rmse,
+            self.relmse
+        );
+        if let (Some(b), Some(z)) = (self.beyond_5_se, self.mean_z2) {
+            s += &format!("beyond 5 s.e.  {:.4} %\nmean z²        {z:.4}\n", 100.0 * b);
+        }
+        s
+    }
+}
