@@ -396,6 +396,18 @@ fn merge(args: &MergeArgs) -> Result<ExitCode> {
         );
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
+    let (exr, png, var) = output::output_paths(&args.out);
+    for p in &args.parts {
+        let same = |o: &PathBuf| std::fs::canonicalize(o).ok() == std::fs::canonicalize(p).ok();
+        if [&exr, &var].into_iter().any(|o| o.exists() && same(o)) {
+            eprintln!(
+                "error: -o {} would overwrite the part {}; write the merge elsewhere",
+                args.out.display(),
+                p.display()
+            );
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
     // Every part is read and checked before anything is written.
     let parts = match args
         .parts
@@ -410,7 +422,6 @@ fn merge(args: &MergeArgs) -> Result<ExitCode> {
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
-    let (exr, png, var) = output::output_paths(&args.out);
     output::write_exr(&exr, &parts.mean, &parts.meta)?;
     output::write_png(&png, &parts.mean, args.exposure)?;
     let mut vmeta = parts.meta.clone();

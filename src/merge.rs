@@ -51,6 +51,16 @@ pub fn variance_path(path: &Path) -> PathBuf {
 
 /// Reads a part and its variance file, checking that it is a hexray render.
 pub fn load_part(path: &Path) -> Result<Part, MergeError> {
+    if path
+        .file_stem()
+        .is_some_and(|s| s.to_string_lossy().ends_with("_var"))
+    {
+        return Err(MergeError(format!(
+            "{}: a variance file, not a part; give the parts' mean EXRs (their _var.exr are \
+             found beside them)",
+            path.display()
+        )));
+    }
     let (mean, meta) =
         read_exr(path).map_err(|e| MergeError(format!("{}: {e:#}", path.display())))?;
     let field = |key: &str| {

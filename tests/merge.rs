@@ -267,3 +267,28 @@ fn the_local_runner_script_equals_the_cli_by_hand() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A variance file given as a part, and an output that would overwrite a part, are refused
+/// (exit 2) and the part is left as it was.
+#[test]
+fn a_variance_file_as_a_part_or_an_output_over_a_part_is_refused() {
+    let dir = temp_dir("misuse");
+    let (p1, p2) = (dir.join("p1.exr"), dir.join("p2.exr"));
+    render(SCENE, 1, 4, &p1);
+    render(SCENE, 2, 4, &p2);
+    let before = std::fs::read(&p1).unwrap();
+    let o = merge(&[p1.clone(), dir.join("p2_var.exr")], &dir.join("m.exr"));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("p2_var.exr") && stderr.contains("variance file"),
+        "{stderr}"
+    );
+    let o = merge(&[p1.clone(), p2], &p1);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("overwrite"), "{stderr}");
+    assert_eq!(std::fs::read(&p1).unwrap(), before);
+    assert!(!dir.join("m.exr").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
