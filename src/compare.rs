@@ -26,6 +26,10 @@ pub struct Comparison {
     pub beyond_5_se: Option<f64>,
     /// With both variances: the mean of z² (1 for a correct pair with correct variances).
     pub mean_z2: Option<f64>,
+    /// With the reference's variance: mean var_r / (r² + 0.01), the part of the expected
+    /// relMSE that is the reference's own noise (E (x − r)² = var_x + var_r + bias²), to be
+    /// subtracted when the reference is not much longer than the candidate.
+    pub relmse_reference_noise: Option<f64>,
 }
 
 /// Reads an RGB image by extension: `.exr` (linear float) or `.npy` (float32/64, H x W x 3).
@@ -81,8 +85,16 @@ pub fn compare(
             rel += (x - r).powi(2) / (r * r + RELMSE_EPSILON);
         }
     }
-    let (mut beyond, mut z2) = (None, None);
+    let (mut beyond, mut z2, mut floor) = (None, None, None);
     if let Some((vc, vr)) = variances {
+        let f: f64 = vr
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .flat_map(|(v, r)| (0..3).map(move |c| (v[c] as f64, r[c] as f64)))
+            .map(|(v, r)| v / (r * r + RELMSE_EPSILON))
+            .sum();
+        floor = Some(f / (3.0 * n));
         let (mut b, mut z) = (0usize, 0.0f64);
         for i in 0..candidate.pixels.len() {
             for c in 0..3 {
@@ -114,6 +126,7 @@ pub fn compare(
         relmse: rel / (3.0 * n),
         beyond_5_se: beyond,
         mean_z2: z2,
+        relmse_reference_noise: floor,
     })
 }
 
@@ -133,6 +146,9 @@ impl Comparison {
         );
         if let (Some(b), Some(z)) = (self.beyond_5_se, self.mean_z2) {
             s += &format!("beyond 5 s.e.  {:.4} %\nmean z²        {z:.4}\n", 100.0 * b);
+        }
+        if let Some(f) = self.relmse_reference_noise {
+            s += &format!("relMSE of the reference's own noise {f:.4e}\n");
         }
         s
     }

@@ -138,15 +138,16 @@ pub fn read_overlay(path: &Path, scene: &str, renderer: &str) -> Result<Vec<Poin
     Ok(out)
 }
 
-/// The points as CSV (`scene,backend,device,spp,seconds,rmse,relmse`).
+/// The points as CSV (`scene,backend,device,spp,seconds,rmse,relmse`; text fields quoted).
 pub fn csv(points: &[Point]) -> String {
     let mut s = String::from("scene,backend,device,spp,seconds,rmse,relmse\n");
     for p in points {
+        let quote = |t: &str| format!("\"{}\"", t.replace('"', "'"));
         s += &format!(
-            "{},{},\"{}\",{},{:.6},{:.6e},{:.6e}\n",
-            p.scene,
-            p.backend,
-            p.device.replace('"', "'"),
+            "{},{},{},{},{:.6},{:.6e},{:.6e}\n",
+            quote(&p.scene),
+            quote(&p.backend),
+            quote(&p.device),
             p.spp,
             p.seconds,
             p.rmse,

@@ -307,7 +307,13 @@ fn curve(args: &CurveArgs) -> Result<ExitCode> {
             };
             let (mut backend, compile) =
                 make_backend(which, &flat, camera, args.seed, n, threads, gpu.as_ref())?;
-            devices.push(format!("{}: {}", backend.name(), backend.device()));
+            // The adapter's name without its (type, API, driver) suffix, to fit the caption.
+            let device = backend.device();
+            let short = device.find(") (").map_or(device.as_str(), |i| &device[..=i]);
+            let entry = format!("{}: {short}", backend.name());
+            if !devices.contains(&entry) {
+                devices.push(entry);
+            }
             let (mut series, warmup) = hexray::curve::measure(
                 &scene.desc.name,
                 backend.as_mut(),

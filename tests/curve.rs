@@ -68,8 +68,9 @@ fn curve_relmse_falls_with_spp_and_its_charts_decode() {
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
-    let spp: Vec<f64> = rows.iter().map(|r| r[3].parse().unwrap()).collect();
-    let relmse: Vec<f64> = rows.iter().map(|r| r[6].parse().unwrap()).collect();
+    // Counted from the end: the quoted text fields before them may hold commas.
+    let spp: Vec<f64> = rows.iter().map(|r| r[r.len() - 4].parse().unwrap()).collect();
+    let relmse: Vec<f64> = rows.iter().map(|r| r[r.len() - 1].parse().unwrap()).collect();
     assert!(
         rows.len() >= 5,
         "only {} waves in 0.5 s:\n{csv}",
