@@ -309,7 +309,9 @@ fn curve(args: &CurveArgs) -> Result<ExitCode> {
                 make_backend(which, &flat, camera, args.seed, n, threads, gpu.as_ref())?;
             // The adapter's name without its (type, API, driver) suffix, to fit the caption.
             let device = backend.device();
-            let short = device.find(") (").map_or(device.as_str(), |i| &device[..=i]);
+            let short = device
+                .find(") (")
+                .map_or(device.as_str(), |i| &device[..=i]);
             let entry = format!("{}: {short}", backend.name());
             if !devices.contains(&entry) {
                 devices.push(entry);

@@ -69,8 +69,14 @@ fn curve_relmse_falls_with_spp_and_its_charts_decode() {
         .map(|l| l.split(',').collect())
         .collect();
     // Counted from the end: the quoted text fields before them may hold commas.
-    let spp: Vec<f64> = rows.iter().map(|r| r[r.len() - 4].parse().unwrap()).collect();
-    let relmse: Vec<f64> = rows.iter().map(|r| r[r.len() - 1].parse().unwrap()).collect();
+    let spp: Vec<f64> = rows
+        .iter()
+        .map(|r| r[r.len() - 4].parse().unwrap())
+        .collect();
+    let relmse: Vec<f64> = rows
+        .iter()
+        .map(|r| r[r.len() - 1].parse().unwrap())
+        .collect();
     assert!(
         rows.len() >= 5,
         "only {} waves in 0.5 s:\n{csv}",
