@@ -2,8 +2,7 @@
 //! naming the file, the line:column and the JSON path of the problem and saying what to do; the
 //! exit status is 2; no output file is created, and an existing one is not touched.
 
-mod common;
-use common::repo;
+use crate::common::repo;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::{Command, Output};

@@ -6,7 +6,6 @@
 //! (used by MIS and by the estimator's weights) disagrees with what it samples is rejected; the
 //! last two tests plant such a disagreement and show it.
 
-mod common;
 use glam::Vec3;
 use hexray::bsdf::sample_bsdf;
 use hexray::flat::{FlatScene, Material, KIND_DIFFUSE};

@@ -2,8 +2,7 @@
 //! with its metadata, an sRGB PNG and, on request, the variance EXR; a time budget and Ctrl-C
 //! both end the render with the samples taken so far written out.
 
-mod common;
-use common::repo;
+use crate::common::repo;
 use hexray::output::read_exr;
 use std::path::PathBuf;
 use std::process::Command;
@@ -213,7 +212,9 @@ fn auto_backend_falls_back_to_the_cpu_and_says_why() {
 /// With an adapter (lavapipe in CI), `--backend gpu` renders and records the adapter.
 #[test]
 fn gpu_backend_renders_and_records_its_adapter() {
-    let Some(gpu) = common::gpu() else { return };
+    let Some(gpu) = crate::common::gpu() else {
+        return;
+    };
     let dir = temp_dir("gpu");
     let exr = dir.join("g.exr");
     let o = hexray()
@@ -243,7 +244,9 @@ fn gpu_backend_renders_and_records_its_adapter() {
 /// the CPU backend, slower. The line says which adapter it passed over and why.
 #[test]
 fn auto_backend_prefers_the_cpu_backend_over_a_software_adapter() {
-    let Some(g) = common::gpu() else { return };
+    let Some(g) = crate::common::gpu() else {
+        return;
+    };
     if g.info.device_type != wgpu::DeviceType::Cpu {
         eprintln!("skipping: the adapter is a hardware GPU");
         return;

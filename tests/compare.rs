@@ -1,8 +1,7 @@
 //! `hexray compare` computes what it says on inputs whose answers are known in closed form, reads
 //! .npy and EXR alike, and refuses images of different sizes.
 
-mod common;
-use common::repo;
+use crate::common::repo;
 use hexray::compare::{compare, read_image, RELMSE_EPSILON};
 use hexray::output::{write_exr, Metadata, RgbImage};
 use npyz::WriterBuilder;

@@ -6,8 +6,7 @@
 //! over 6+ doublings a non-negative correlation means the error does not fall at all (a
 //! renderer that ignored new samples, or a curve measured against the wrong reference).
 
-mod common;
-use common::repo;
+use crate::common::repo;
 use hexray::curve::spearman;
 use std::process::Command;
 

@@ -3,8 +3,7 @@
 //! seed gives bit-identical sums for any thread count and any split into passes, and another
 //! seed gives another image.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::camera::Camera;
 use hexray::film::Film;
 use hexray::render::{Backend, CpuBackend};

@@ -10,8 +10,7 @@
 //!
 //! Statistic: |image mean − L| ≤ 4 s.e. per channel.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 use std::f64::consts::PI;
 

@@ -6,8 +6,7 @@
 //! the test asserts |mean − 1| ≤ 4 s.e. per channel (false alarm 6e-5 per channel), and that the
 //! s.e. is below 0.5 %, so that a 2 % error could not hide in the noise.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 
 const SIZE: u32 = 32;

@@ -2,8 +2,7 @@
 //! enclosure whose walls emit 1 − ρ and reflect ρ, the radiance is exactly 1 everywhere. The
 //! statistic is the same: |image mean − 1| ≤ 4 s.e. per channel, with the s.e. below 0.5 %.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 
 const SIZE: u32 = 32;

@@ -2,8 +2,7 @@
 //! loss stay in the film, and the pass that meets the loss returns an error instead of
 //! corrupting it. The loss is provoked with `Device::destroy` on a device of the test's own.
 
-mod common;
-use common::{gpu, load};
+use crate::common::{gpu, load};
 use hexray::camera::Camera;
 use hexray::cpu::Faults;
 use hexray::film::Film;

@@ -9,8 +9,7 @@
 //! scenes run at 64 spp, enough for gross errors (a wrong Fresnel term, a missing η², a lost
 //! light), not for 3 % ones.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 use hexray::stats::{welch_blocks, MeanImage};
 

@@ -2,8 +2,7 @@
 //! `shaders/sampling.wgsl` and a probe entry point writes the raw bits of `draw4` for a grid of
 //! (pixel, sample, dimension) keys, and they must equal `Sampler::draw4` bit for bit.
 
-mod common;
-use common::gpu;
+use crate::common::gpu;
 use hexray::gpu::shader::validate;
 use hexray::sampling::Sampler;
 use wgpu::util::DeviceExt;

@@ -15,8 +15,7 @@
 //! reference at that resolution; the statistic is then taken over 4x4 blocks of the rendered
 //! pixels as at 256x256 (1024 hexray samples per block in both tests).
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 use hexray::output::read_npy_rgb;
 use hexray::stats::{z_scores, MeanImage};

@@ -3,8 +3,7 @@
 //! (thesis eq. 9.13) weighs each strategy by n_i · p_i, so N enters both power-heuristic weights
 //! and the NEE sum is divided by N; getting either wrong biases the image.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 use hexray::film::Film;
 use hexray::stats::{welch_blocks, MeanImage};

@@ -3,8 +3,7 @@
 //! the order of its arguments; it refuses what does not belong together; the one-host runner
 //! script gives what the CLI gives by hand.
 
-mod common;
-use common::repo;
+use crate::common::repo;
 use hexray::output::{read_exr, Metadata, RgbImage};
 use hexray::stats::{student_t_two_sided_p, welch_blocks, MeanImage};
 use std::path::{Path, PathBuf};

@@ -8,8 +8,7 @@
 //! sum of 64 terms has error below 64 · 6e-8 = 4e-6 in the worst case, typically √64 times
 //! less). The naive sum's error is printed for docs/gpu.md, not asserted.
 
-mod common;
-use common::load;
+use crate::common::load;
 use hexray::camera::Camera;
 use hexray::cpu::{trace_path, Faults};
 use hexray::gpu::render::MAX_PASS_SPP;

@@ -8,8 +8,7 @@
 //! Two-sided at α = 0.01: χ²(99) quantiles 66.5 and 139.0, so a claimed variance off by a
 //! factor 2 either way (statistic 49.5 or 198 in expectation) is rejected.
 
-mod common;
-use common::*;
+use crate::common::*;
 use hexray::cpu::Faults;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 

@@ -1,0 +1,27 @@
+//! The integration tests, one module per property file (`tests/<property>.rs`), built as one
+//! test executable: each executable is a full link of the renderer and wgpu (with the release
+//! profile's LTO, about half a minute each on 2 cores), so one binary instead of twenty keeps
+//! `cargo test --release` quick. Run one file's tests with a filter: `cargo test --release furnace::`.
+
+mod bad_input;
+mod bench;
+mod chi_square;
+mod cli;
+mod common;
+mod compare;
+mod curve;
+mod determinism;
+mod direct_light;
+mod furnace;
+mod gpu_furnace;
+mod gpu_lost;
+mod gpu_parity;
+mod gpu_random;
+mod independent_renderer;
+mod layout;
+mod light_samples;
+mod merge;
+mod precision;
+mod reintersect;
+mod shaders;
+mod standard_error;
