@@ -34,11 +34,15 @@ struct Emitter {
     pmf: f32,
 }
 
+// Both children's boxes, one row per axis: (min 0, min 1, max 0, max 1). Per child c:
+// count[c] > 0 is a leaf of count[c] entries of `prims` from child[c]; count[c] == 0 is the
+// interior node child[c].
 struct BvhNode {
-    min: vec3<f32>,
-    offset: u32,
-    max: vec3<f32>,
-    count_axis: u32,
+    x: vec4<f32>,
+    y: vec4<f32>,
+    z: vec4<f32>,
+    child: vec2<u32>,
+    count: vec2<u32>,
 }
 
 struct Camera {

@@ -1,9 +1,10 @@
-//! The bounding volume hierarchy: a binned-SAH build into depth-first flat nodes, and the one
-//! traversal (closest hit or any hit) that the CPU integrator uses and `shaders/bvh.wgsl` repeats.
+//! The bounding volume hierarchy: a binned-SAH build of a binary tree, flattened into depth-first
+//! nodes that each hold both children's boxes ([`BvhNode`]), and the one traversal (closest hit
+//! or any hit) that the CPU integrator uses and `shaders/bvh.wgsl` repeats.
 
 use crate::flat::{BvhNode, FlatScene, Sphere, Triangle, PRIM_SPHERE_BIT};
 use crate::geometry::{
-    intersect_aabb, intersect_sphere, intersect_triangle, safe_inverse, sphere_point,
+    intersect_aabb_pair, intersect_sphere, intersect_triangle, safe_inverse, sphere_point,
     triangle_normal, triangle_point, Ray, SurfaceHit,
 };
 use glam::Vec3;
@@ -14,7 +15,7 @@ pub const MAX_LEAF: usize = 4;
 /// SAH buckets per axis.
 const BINS: usize = 16;
 /// Depth beyond which a node becomes a leaf whatever its size; the traversal stack holds
-/// `STACK_SIZE` entries and a depth-first traversal pushes at most one per level.
+/// `STACK_SIZE` entries and the traversal pushes at most one per level.
 const MAX_DEPTH: usize = 60;
 /// Entries in the traversal stack (shared with the WGSL private array).
 pub const STACK_SIZE: usize = 64;
@@ -55,6 +56,27 @@ struct PrimInfo {
     id: u32,
 }
 
+/// A node of the binary tree as the builder makes it, before flattening.
+enum Built {
+    Leaf {
+        bounds: Aabb,
+        offset: u32,
+        count: u32,
+    },
+    Interior {
+        bounds: Aabb,
+        children: Box<[Built; 2]>,
+    },
+}
+
+impl Built {
+    fn bounds(&self) -> &Aabb {
+        match self {
+            Built::Leaf { bounds, .. } | Built::Interior { bounds, .. } => bounds,
+        }
+    }
+}
+
 /// Builds the BVH over all triangles and spheres; returns the nodes (root first) and the
 /// primitive references that leaves index into.
 pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u32>) {
@@ -84,23 +106,71 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
             id: i as u32 | PRIM_SPHERE_BIT,
         });
     }
-    let mut nodes = Vec::with_capacity(2 * info.len());
     let n = info.len();
-    build_node(&mut info, 0, n, 0, &mut nodes);
+    let root = build_node(&mut info, 0, n, 0);
+    // The root must be an interior node; a scene of one primitive gets a root whose two
+    // children are the same leaf.
+    let root = match root {
+        leaf @ Built::Leaf { .. } => {
+            let (bounds, offset, count) = match &leaf {
+                Built::Leaf {
+                    bounds,
+                    offset,
+                    count,
+                } => (*bounds, *offset, *count),
+                Built::Interior { .. } => unreachable!(),
+            };
+            let twin = Built::Leaf {
+                bounds,
+                offset,
+                count,
+            };
+            Built::Interior {
+                bounds,
+                children: Box::new([leaf, twin]),
+            }
+        }
+        interior => interior,
+    };
+    let mut nodes = Vec::with_capacity(n);
+    flatten(&root, &mut nodes);
     let prims = info.iter().map(|p| p.id).collect();
     (nodes, prims)
 }
 
-/// Appends the subtree over `info[start..end]` in depth-first order and returns its index.
-fn build_node(
-    info: &mut [PrimInfo],
-    start: usize,
-    end: usize,
-    depth: usize,
-    nodes: &mut Vec<BvhNode>,
-) -> usize {
+/// Appends the interior node `built` and its interior descendants in depth-first order, each
+/// holding its children's boxes; returns its index.
+fn flatten(built: &Built, nodes: &mut Vec<BvhNode>) -> u32 {
+    let Built::Interior { children, .. } = built else {
+        unreachable!("leaves live in their parent's node");
+    };
     let index = nodes.len();
     nodes.push(BvhNode::default());
+    let mut node = BvhNode::default();
+    for (c, child) in children.iter().enumerate() {
+        let b = child.bounds();
+        for (row, axis) in [(&mut node.x, 0), (&mut node.y, 1), (&mut node.z, 2)] {
+            row[c] = b.min[axis];
+            row[2 + c] = b.max[axis];
+        }
+        match child {
+            Built::Leaf { offset, count, .. } => {
+                node.child[c] = *offset;
+                node.count[c] = *count;
+            }
+            Built::Interior { .. } => {
+                node.child[c] = flatten(child, nodes);
+                node.count[c] = 0;
+            }
+        }
+    }
+    nodes[index] = node;
+    index as u32
+}
+
+/// Builds the subtree over `info[start..end]`, reordering `info` so that every leaf's
+/// primitives are contiguous.
+fn build_node(info: &mut [PrimInfo], start: usize, end: usize, depth: usize) -> Built {
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for p in &info[start..end] {
@@ -108,17 +178,13 @@ fn build_node(
         cbounds.grow_point(p.centroid);
     }
     let count = end - start;
-    let make_leaf = |nodes: &mut Vec<BvhNode>| {
-        nodes[index] = BvhNode {
-            min: bounds.min.into(),
-            offset: start as u32,
-            max: bounds.max.into(),
-            count_axis: count as u32,
-        };
-        index
+    let leaf = Built::Leaf {
+        bounds,
+        offset: start as u32,
+        count: count as u32,
     };
-    if count <= 1 || depth >= MAX_DEPTH && count <= 0xffff {
-        return make_leaf(nodes);
+    if count <= 1 || depth >= MAX_DEPTH {
+        return leaf;
     }
 
     // Choose the split: the cheapest bucket boundary over all three axes by the surface area
@@ -162,47 +228,44 @@ fn build_node(
         }
     }
 
-    let (axis, mid) = match best {
+    let mid = match best {
         Some((cost, axis, boundary)) => {
             if count <= MAX_LEAF && cost >= count as f32 {
-                return make_leaf(nodes);
+                return leaf;
             }
             let (lo, ext) = (cbounds.min[axis], extent[axis]);
             let mid = partition(&mut info[start..end], |p| {
                 let b = ((p.centroid[axis] - lo) / ext * BINS as f32) as usize;
                 b.min(BINS - 1) < boundary
             });
-            (axis, start + mid)
+            start + mid
         }
         None => {
             // All centroids coincide: no split separates anything, so halve by index.
             if count <= MAX_LEAF {
-                return make_leaf(nodes);
+                return leaf;
             }
-            (0, start + count / 2)
+            start + count / 2
         }
     };
-    build_node(info, start, mid, depth + 1, nodes);
-    let second = build_node(info, mid, end, depth + 1, nodes);
-    nodes[index] = BvhNode {
-        min: bounds.min.into(),
-        offset: second as u32,
-        max: bounds.max.into(),
-        count_axis: (axis as u32) << 16,
-    };
-    index
+    let first = build_node(info, start, mid, depth + 1);
+    let second = build_node(info, mid, end, depth + 1);
+    Built::Interior {
+        bounds,
+        children: Box::new([first, second]),
+    }
 }
 
-/// The number of interior nodes on the longest root-to-leaf path: the most entries a
-/// near-first traversal ever holds on its stack.
+/// The number of nodes on the longest path from the root: the traversal pushes at most one
+/// child per node it visits, so its stack never holds more entries than this.
 pub fn depth(nodes: &[BvhNode]) -> usize {
     fn walk(nodes: &[BvhNode], i: usize) -> usize {
         let n = &nodes[i];
-        if n.count() > 0 {
-            0
-        } else {
-            1 + walk(nodes, i + 1).max(walk(nodes, n.offset as usize))
-        }
+        1 + (0..2)
+            .filter(|&c| n.count[c] == 0)
+            .map(|c| walk(nodes, n.child[c] as usize))
+            .max()
+            .unwrap_or(0)
     }
     if nodes.is_empty() {
         0
@@ -259,9 +322,12 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
     hit
 }
 
-/// One traversal for both modes: near child first (by the sign of the ray direction on the
-/// node's split axis), an explicit stack, and `on_hit(prim, t, t_err, b1, b2, &mut t_limit)`
-/// deciding what a hit means; it returns true to stop at once (any-hit).
+/// One traversal for both modes. At each node both children's boxes are tested at once; the
+/// hit children are taken nearer first (by entry distance): a leaf's primitives are tested at
+/// once, the first interior child is visited next and a second one is pushed with its entry
+/// distance, so a child the ray misses is never pushed and a pushed one that a closer hit has
+/// since passed is dropped when popped. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
+/// what a hit means; it returns true to stop at once (any-hit).
 #[inline]
 fn traverse(
     scene: &FlatScene,
@@ -270,58 +336,65 @@ fn traverse(
     mut on_hit: impl FnMut(u32, f32, f32, f32, f32, &mut f32) -> bool,
 ) {
     let inv_d = safe_inverse(ray.d);
-    let dir_is_neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
     let mut t_limit = t_max;
-    let mut stack = [0u32; STACK_SIZE];
+    // Interior children still to visit, with the distance at which the ray enters them.
+    let mut stack = [(0u32, 0.0f32); STACK_SIZE];
     let mut sp = 0usize;
     let mut current = 0u32;
     loop {
         let node = &scene.nodes[current as usize];
-        if intersect_aabb(
-            Vec3::from(node.min),
-            Vec3::from(node.max),
-            ray.o,
-            inv_d,
-            t_limit,
-        ) {
-            let count = node.count();
-            if count > 0 {
-                for k in node.offset..node.offset + count {
-                    let prim = scene.prims[k as usize];
-                    let stop = if prim & PRIM_SPHERE_BIT == 0 {
-                        match intersect_triangle(ray, &scene.triangles[prim as usize]) {
-                            Some(h) => on_hit(prim, h.t, h.t_err, h.b1, h.b2, &mut t_limit),
-                            None => false,
-                        }
-                    } else {
-                        let s = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
-                        match intersect_sphere(ray, s) {
-                            Some(h) => on_hit(prim, h.t, h.t_err, 0.0, 0.0, &mut t_limit),
-                            None => false,
-                        }
-                    };
-                    if stop {
-                        return;
-                    }
-                }
-            } else {
-                // Visit the near child first; remember the far one.
-                if dir_is_neg[node.axis()] {
-                    stack[sp] = current + 1;
-                    current = node.offset;
-                } else {
-                    stack[sp] = node.offset;
-                    current += 1;
-                }
-                sp += 1;
+        let t_enter = intersect_aabb_pair(node, ray.o, inv_d, t_limit);
+        let near = usize::from(t_enter[1] < t_enter[0]);
+        let mut next = None;
+        for c in [near, 1 - near] {
+            // A missed box, or one that a hit in the nearer child's leaf has since passed.
+            if t_enter[c] < 0.0 || t_enter[c] > t_limit {
                 continue;
             }
+            let count = node.count[c];
+            if count == 0 {
+                if next.is_none() {
+                    next = Some(node.child[c]);
+                } else {
+                    stack[sp] = (node.child[c], t_enter[c]);
+                    sp += 1;
+                }
+                continue;
+            }
+            for k in node.child[c]..node.child[c] + count {
+                let prim = scene.prims[k as usize];
+                let stop = if prim & PRIM_SPHERE_BIT == 0 {
+                    match intersect_triangle(ray, &scene.triangles[prim as usize]) {
+                        Some(h) => on_hit(prim, h.t, h.t_err, h.b1, h.b2, &mut t_limit),
+                        None => false,
+                    }
+                } else {
+                    let s = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
+                    match intersect_sphere(ray, s) {
+                        Some(h) => on_hit(prim, h.t, h.t_err, 0.0, 0.0, &mut t_limit),
+                        None => false,
+                    }
+                };
+                if stop {
+                    return;
+                }
+            }
         }
-        if sp == 0 {
-            return;
+        // Descend into the first interior child, or pop the most recently pushed one that the
+        // ray still enters before t_limit.
+        if next.is_none() {
+            while sp > 0 {
+                sp -= 1;
+                if stack[sp].1 <= t_limit {
+                    next = Some(stack[sp].0);
+                    break;
+                }
+            }
         }
-        sp -= 1;
-        current = stack[sp];
+        match next {
+            Some(n) => current = n,
+            None => return,
+        }
     }
 }
 
@@ -379,23 +452,30 @@ mod tests {
             .collect();
         let (nodes, _) = build(&tris, &[]);
         let depth = depth(&nodes);
-        // Replay the traversal order of `traverse` with every box hit: the worst case.
+        // Replay the traversal of `traverse` with every box hit (the worst case), taking
+        // either child as the nearer one by a pattern of bits.
         let mut worst = 0;
-        for signs in 0..8u32 {
+        for pattern in 0..8u32 {
             let mut stack = vec![];
             let mut current = 0usize;
+            let mut visits = 0u32;
             loop {
                 let node = &nodes[current];
-                if node.count() == 0 {
-                    let neg = signs >> node.axis() & 1 == 1;
-                    let (near, far) = if neg {
-                        (node.offset as usize, current + 1)
-                    } else {
-                        (current + 1, node.offset as usize)
-                    };
-                    stack.push(far);
-                    worst = worst.max(stack.len());
-                    current = near;
+                visits += 1;
+                let near = ((pattern >> (visits % 3)) & 1) as usize;
+                let mut next = None;
+                for c in [near, 1 - near] {
+                    if node.count[c] == 0 {
+                        if next.is_none() {
+                            next = Some(node.child[c] as usize);
+                        } else {
+                            stack.push(node.child[c] as usize);
+                            worst = worst.max(stack.len());
+                        }
+                    }
+                }
+                if let Some(n) = next {
+                    current = n;
                     continue;
                 }
                 match stack.pop() {
@@ -403,6 +483,7 @@ mod tests {
                     None => break,
                 }
             }
+            assert_eq!(visits as usize, nodes.len(), "every node is visited once");
         }
         assert!(worst <= depth, "stack reached {worst}, depth {depth}");
         assert!(

@@ -9,8 +9,8 @@
 //! that computed it. No fixed epsilon, and nothing proportional to the scene's size: the offset
 //! scales with the magnitude of the coordinates, which is what far-from-origin scenes need.
 
-use crate::flat::{Sphere, Triangle};
-use glam::Vec3;
+use crate::flat::{BvhNode, Sphere, Triangle};
+use glam::{Vec3, Vec4, Vec4Swizzles};
 
 /// Half an ulp of 1.0 in f32: the relative rounding error of one operation.
 pub const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
@@ -229,15 +229,29 @@ pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
     (p, p_err, local / sphere.radius)
 }
 
-/// The slab test against a node's box (Kay and Kajiya), with pbrt-v4's 1 + 2 gamma(3) widening of
-/// the far distance so that rounding never culls a box the ray touches.
+/// The slab test (Kay and Kajiya) against both children's boxes of a BVH node at once, with
+/// pbrt-v4's 1 + 2 gamma(3) widening of the far distance so that rounding never culls a box the
+/// ray touches. Returns, per child, the distance at which the ray enters its box (0 when it
+/// starts inside), or -1 when it misses the box or enters it beyond `t_max` (-1, not infinity,
+/// because WGSL has no infinity): the traversal visits the nearer child first and drops a child
+/// that a closer hit has since passed.
+///
+/// Each row of the node is (min 0, min 1, max 0, max 1) along one axis, so `t` holds the slab
+/// distances of both children and swapping its halves pairs each min plane with its max plane.
 #[inline]
-pub fn intersect_aabb(min: Vec3, max: Vec3, o: Vec3, inv_d: Vec3, t_max: f32) -> bool {
-    let t_lo = (min - o) * inv_d;
-    let t_hi = (max - o) * inv_d;
-    let t_near = t_lo.min(t_hi).max_element().max(0.0);
-    let t_far = t_lo.max(t_hi).min_element() * (1.0 + 2.0 * gamma(3));
-    t_near <= t_far.min(t_max)
+pub fn intersect_aabb_pair(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32; 2] {
+    let tx = (Vec4::from(node.x) - Vec4::splat(o.x)) * inv_d.x;
+    let ty = (Vec4::from(node.y) - Vec4::splat(o.y)) * inv_d.y;
+    let tz = (Vec4::from(node.z) - Vec4::splat(o.z)) * inv_d.z;
+    let (sx, sy, sz) = (tx.zwxy(), ty.zwxy(), tz.zwxy());
+    let t_near = tx.min(sx).max(ty.min(sy)).max(tz.min(sz)).max(Vec4::ZERO);
+    let t_far = tx.max(sx).min(ty.max(sy)).min(tz.max(sz)) * (1.0 + 2.0 * gamma(3));
+    let t = Vec4::select(
+        t_near.cmple(t_far.min(Vec4::splat(t_max))),
+        t_near,
+        Vec4::splat(-1.0),
+    );
+    [t.x, t.y]
 }
 
 /// 1/d per component, with zero components nudged to 1e-30 (keeping the sign) so that the slab

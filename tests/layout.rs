@@ -66,10 +66,11 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             pmf
         }),
         rust_layout!(BvhNode {
-            min,
-            offset,
-            max,
-            count_axis
+            x,
+            y,
+            z,
+            child,
+            count
         }),
         rust_layout!(Camera {
             eye,

@@ -24,7 +24,7 @@ fn the_kernel_parses_and_validates_with_naga_in_both_residencies() {
         spheres: 1,
         materials: 9,
         emitters: 2,
-        nodes: 31,
+        nodes: 15,
         prims: 7,
         bvh_depth: 5,
     };

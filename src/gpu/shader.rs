@@ -38,8 +38,8 @@ pub fn all_files() -> Vec<&'static str> {
 }
 
 /// What the kernel is specialised to: the lengths of the scene arrays (the uniform bindings'
-/// `LEN_*` constants) and the depth of the BVH (`STACK_SIZE` in bvh.wgsl: a near-first
-/// traversal pushes at most one node per level, and lavapipe keeps the private stack in
+/// `LEN_*` constants) and the depth of the BVH (`STACK_SIZE` in bvh.wgsl: the traversal pushes
+/// at most one node per level, and lavapipe keeps the private stack in
 /// registers, so a stack no deeper than the tree runs markedly faster there; docs/gpu.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ArrayLengths {
@@ -50,7 +50,7 @@ pub struct ArrayLengths {
     pub nodes: usize,
     /// In vec4<u32>s (four primitive references each).
     pub prims: usize,
-    /// Interior nodes on the longest root-to-leaf path (the traversal stack's high-water mark).
+    /// Nodes on the longest path from the root (`bvh::depth`, a bound on the traversal stack).
     pub bvh_depth: usize,
 }
 
