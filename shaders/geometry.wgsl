@@ -185,18 +185,20 @@ fn sphere_point(ray: Ray, sphere: Sphere, t: f32) -> SurfaceHit {
     return SurfaceHit(t, p, p_err, local / sphere.radius, sphere.material, 0u);
 }
 
-// The slab test against both children's boxes of a node at once, with pbrt-v4's 1 + 2 gamma(3)
-// widening of the far distance. Per child: the distance at which the ray enters the box (0
-// inside), or -1 when it misses or enters beyond t_max. Each row is (min 0, min 1, max 0,
-// max 1), so swapping its halves pairs each min plane with its max plane.
-fn intersect_aabb_pair(node: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) -> vec2<f32> {
-    let tx = (node.x - o.x) * inv_d.x;
-    let ty = (node.y - o.y) * inv_d.y;
-    let tz = (node.z - o.z) * inv_d.z;
-    let t_near = max(max(max(min(tx, tx.zwxy), min(ty, ty.zwxy)), min(tz, tz.zwxy)), vec4<f32>(0.0));
-    let t_far = min(min(max(tx, tx.zwxy), max(ty, ty.zwxy)), max(tz, tz.zwxy)) * (1.0 + 2.0 * gamma(3.0));
-    let t = select(vec4<f32>(-1.0), t_near, t_near <= min(t_far, vec4<f32>(t_max)));
-    return t.xy;
+// The slab test against the four children's boxes of a node at once, with pbrt-v4's
+// 1 + 2 gamma(3) widening of the far distance. Per child slot: the distance at which the ray
+// enters the box (0 inside), or -1 when it misses, enters beyond t_max or the slot is empty.
+fn intersect_aabb4(node: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) -> vec4<f32> {
+    let lo_x = (node.min_x - o.x) * inv_d.x;
+    let hi_x = (node.max_x - o.x) * inv_d.x;
+    let lo_y = (node.min_y - o.y) * inv_d.y;
+    let hi_y = (node.max_y - o.y) * inv_d.y;
+    let lo_z = (node.min_z - o.z) * inv_d.z;
+    let hi_z = (node.max_z - o.z) * inv_d.z;
+    let t_near = max(max(max(min(lo_x, hi_x), min(lo_y, hi_y)), min(lo_z, hi_z)), vec4<f32>(0.0));
+    let t_far = min(min(max(lo_x, hi_x), max(lo_y, hi_y)), max(lo_z, hi_z)) * (1.0 + 2.0 * gamma(3.0));
+    let hit = t_near <= min(t_far, vec4<f32>(t_max)) & node.count != vec4<u32>(EMPTY_SLOT);
+    return select(vec4<f32>(-1.0), t_near, hit);
 }
 
 // 1/d with zero components nudged to 1e-30 (keeping the sign), so the slab test never

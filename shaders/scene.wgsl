@@ -34,16 +34,21 @@ struct Emitter {
     pmf: f32,
 }
 
-// Both children's boxes, one row per axis: (min 0, min 1, max 0, max 1). Per child c:
-// count[c] > 0 is a leaf of count[c] entries of `prims` from child[c]; count[c] == 0 is the
-// interior node child[c].
+// A four-wide BVH node: the children's boxes, one row per plane. Per child slot c: count[c] > 0
+// is a leaf of count[c] entries of `prims` from child[c]; count[c] == 0 is the interior node
+// child[c]; count[c] == EMPTY_SLOT is an unused slot.
 struct BvhNode {
-    x: vec4<f32>,
-    y: vec4<f32>,
-    z: vec4<f32>,
-    child: vec2<u32>,
-    count: vec2<u32>,
+    min_x: vec4<f32>,
+    max_x: vec4<f32>,
+    min_y: vec4<f32>,
+    max_y: vec4<f32>,
+    min_z: vec4<f32>,
+    max_z: vec4<f32>,
+    child: vec4<u32>,
+    count: vec4<u32>,
 }
+
+const EMPTY_SLOT: u32 = 0xffffffffu;
 
 struct Camera {
     eye: vec3<f32>,

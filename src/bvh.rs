@@ -1,24 +1,27 @@
-//! The bounding volume hierarchy: a binned-SAH build of a binary tree, flattened into depth-first
-//! nodes that each hold both children's boxes ([`BvhNode`]), and the one traversal (closest hit
-//! or any hit) that the CPU integrator uses and `shaders/bvh.wgsl` repeats.
+//! The bounding volume hierarchy: a binned-SAH build of a binary tree, collapsed into a
+//! four-wide tree of depth-first nodes that hold their children's boxes ([`BvhNode`]), and the
+//! one traversal (closest hit or any hit) that the CPU integrator uses and `shaders/bvh.wgsl`
+//! repeats.
 
-use crate::flat::{BvhNode, FlatScene, Sphere, Triangle, PRIM_SPHERE_BIT};
+use crate::flat::{BvhNode, FlatScene, Sphere, Triangle, EMPTY_SLOT, PRIM_SPHERE_BIT};
 use crate::geometry::{
-    intersect_aabb_pair, intersect_sphere, intersect_triangle, safe_inverse, sphere_point,
+    intersect_aabb4, intersect_sphere, intersect_triangle, safe_inverse, sphere_point,
     triangle_normal, triangle_point, Ray, SurfaceHit,
 };
-use glam::Vec3;
+use arrayvec::ArrayVec;
+use glam::{BVec4A, Vec3, Vec4, Vec4Swizzles};
 
 /// At most this many primitives in a leaf (pbrt-v4's `maxPrimsInNode` default is 255 for its
 /// general BVH; small leaves suit a shader that visits one node per loop iteration).
 pub const MAX_LEAF: usize = 4;
 /// SAH buckets per axis.
 const BINS: usize = 16;
-/// Depth beyond which a node becomes a leaf whatever its size; the traversal stack holds
-/// `STACK_SIZE` entries and the traversal pushes at most one per level.
+/// Depth of the binary tree beyond which a node becomes a leaf whatever its size. The four-wide
+/// tree is no deeper, and the traversal pushes at most three children per level, so its stack
+/// never holds more than `3 * MAX_DEPTH` entries.
 const MAX_DEPTH: usize = 60;
-/// Entries in the traversal stack (shared with the WGSL private array).
-pub const STACK_SIZE: usize = 64;
+/// Entries in the CPU traversal stack; the WGSL stack is sized to the scene ([`stack_size`]).
+pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 /// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2).
 const TRAVERSAL_COST: f32 = 0.5;
 
@@ -138,28 +141,45 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
     (nodes, prims)
 }
 
-/// Appends the interior node `built` and its interior descendants in depth-first order, each
-/// holding its children's boxes; returns its index.
+/// Appends the interior node `built` and its interior descendants in depth-first order as
+/// four-wide nodes; returns its index. The binary node's two children become up to four by
+/// repeatedly opening the interior child of largest surface area (the collapse of Wald et al.,
+/// "Getting Rid of Packets", 2008), which keeps the SAH tree's structure and halves the levels.
 fn flatten(built: &Built, nodes: &mut Vec<BvhNode>) -> u32 {
     let Built::Interior { children, .. } = built else {
         unreachable!("leaves live in their parent's node");
     };
+    let mut kids: Vec<&Built> = children.iter().collect();
+    while kids.len() < 4 {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, Built::Interior { .. }))
+            .max_by(|(_, a), (_, b)| a.bounds().area().total_cmp(&b.bounds().area()))
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let Built::Interior { children, .. } = kids.remove(i) else {
+            unreachable!()
+        };
+        kids.extend(children.iter());
+    }
     let index = nodes.len();
     nodes.push(BvhNode::default());
-    let mut node = BvhNode::default();
-    for (c, child) in children.iter().enumerate() {
-        let b = child.bounds();
-        for (row, axis) in [(&mut node.x, 0), (&mut node.y, 1), (&mut node.z, 2)] {
-            row[c] = b.min[axis];
-            row[2 + c] = b.max[axis];
-        }
-        match child {
+    let mut node = BvhNode {
+        count: [EMPTY_SLOT; 4],
+        ..Default::default()
+    };
+    for (c, kid) in kids.iter().enumerate() {
+        let b = kid.bounds();
+        (node.min_x[c], node.min_y[c], node.min_z[c]) = (b.min.x, b.min.y, b.min.z);
+        (node.max_x[c], node.max_y[c], node.max_z[c]) = (b.max.x, b.max.y, b.max.z);
+        match kid {
             Built::Leaf { offset, count, .. } => {
                 node.child[c] = *offset;
                 node.count[c] = *count;
             }
             Built::Interior { .. } => {
-                node.child[c] = flatten(child, nodes);
+                node.child[c] = flatten(kid, nodes);
                 node.count[c] = 0;
             }
         }
@@ -256,12 +276,11 @@ fn build_node(info: &mut [PrimInfo], start: usize, end: usize, depth: usize) -> 
     }
 }
 
-/// The number of nodes on the longest path from the root: the traversal pushes at most one
-/// child per node it visits, so its stack never holds more entries than this.
+/// The number of nodes on the longest path from the root.
 pub fn depth(nodes: &[BvhNode]) -> usize {
     fn walk(nodes: &[BvhNode], i: usize) -> usize {
         let n = &nodes[i];
-        1 + (0..2)
+        1 + (0..4)
             .filter(|&c| n.count[c] == 0)
             .map(|c| walk(nodes, n.child[c] as usize))
             .max()
@@ -272,6 +291,12 @@ pub fn depth(nodes: &[BvhNode]) -> usize {
     } else {
         walk(nodes, 0)
     }
+}
+
+/// A bound on the traversal stack: it holds children pushed by the ancestors of the node being
+/// visited, at most three per node, so never more than three per level.
+pub fn stack_size(nodes: &[BvhNode]) -> usize {
+    3 * depth(nodes)
 }
 
 /// In-place partition; returns the number of elements for which `pred` holds (moved first).
@@ -322,12 +347,52 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
     hit
 }
 
-/// One traversal for both modes. At each node both children's boxes are tested at once; the
-/// hit children are taken nearer first (by entry distance): a leaf's primitives are tested at
-/// once, the first interior child is visited next and a second one is pushed with its entry
-/// distance, so a child the ray misses is never pushed and a pushed one that a closer hit has
-/// since passed is dropped when popped. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
-/// what a hit means; it returns true to stop at once (any-hit).
+/// The sort key of a missed child slot: a finite float above every entry distance.
+const MISS_KEY: f32 = f32::MAX;
+
+/// Child slots ordered by entry distance, nearest first, misses last. Each slot's key is its
+/// entry distance with the slot number in its two lowest mantissa bits (a hit's t >= 0, so keys
+/// order as the distances rounded down to 4 ulp do), or [`MISS_KEY`]; five compare-exchanges
+/// sort the four keys (a sorting network: three rounds of four-wide min/max, no branches).
+#[inline]
+fn nearest_first(t_enter: [f32; 4]) -> [f32; 4] {
+    let key = |c: usize| {
+        let t = if t_enter[c] < 0.0 {
+            MISS_KEY
+        } else {
+            t_enter[c]
+        };
+        f32::from_bits((t.to_bits() & !3) | c as u32)
+    };
+    let k = Vec4::new(key(0), key(1), key(2), key(3));
+    // (0, 1) and (2, 3); then (0, 2) and (1, 3); then (1, 2).
+    let (p, q) = (k.yxwz(), BVec4A::new(true, false, true, false));
+    let k = Vec4::select(q, k.min(p), k.max(p));
+    let (p, q) = (k.zwxy(), BVec4A::new(true, true, false, false));
+    let k = Vec4::select(q, k.min(p), k.max(p));
+    let p = k.xzyw();
+    Vec4::select(BVec4A::new(true, true, false, false), k.min(p), k.max(p)).to_array()
+}
+
+/// The child slot of a sort key.
+#[inline]
+fn slot(key: f32) -> usize {
+    (key.to_bits() & 3) as usize
+}
+
+/// The entry distance of a sort key, rounded down by up to 3 ulp.
+#[inline]
+fn key_distance(key: f32) -> f32 {
+    f32::from_bits(key.to_bits() & !3)
+}
+
+/// One traversal for both modes. At each node the four children's boxes are tested at once and
+/// the hit children sorted by entry distance. The leaves among them are tested first, nearest
+/// first, so that their hits lower t_limit before anything is pushed; then the nearest interior
+/// child is visited next and the others are pushed farthest first (so nearer ones pop first),
+/// each with its entry distance: a missed child is never pushed and a pushed one that a closer
+/// hit has since passed is dropped when popped. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)`
+/// decides what a hit means; it returns true to stop at once (any-hit).
 #[inline]
 fn traverse(
     scene: &FlatScene,
@@ -338,27 +403,22 @@ fn traverse(
     let inv_d = safe_inverse(ray.d);
     let mut t_limit = t_max;
     // Interior children still to visit, with the distance at which the ray enters them.
-    let mut stack = [(0u32, 0.0f32); STACK_SIZE];
-    let mut sp = 0usize;
+    let mut stack = ArrayVec::<(u32, f32), STACK_SIZE>::new();
     let mut current = 0u32;
     loop {
         let node = &scene.nodes[current as usize];
-        let t_enter = intersect_aabb_pair(node, ray.o, inv_d, t_limit);
-        let near = usize::from(t_enter[1] < t_enter[0]);
-        let mut next = None;
-        for c in [near, 1 - near] {
-            // A missed box, or one that a hit in the nearer child's leaf has since passed.
-            if t_enter[c] < 0.0 || t_enter[c] > t_limit {
-                continue;
+        let t_enter = intersect_aabb4(node, ray.o, inv_d, t_limit);
+        let order = nearest_first(t_enter);
+        for key in order {
+            let c = slot(key);
+            // In key order, after a miss or a key past t_limit come only misses and farther
+            // boxes (a key is its distance rounded down, so none is skipped that the ray enters
+            // before t_limit).
+            if t_enter[c] < 0.0 || key_distance(key) > t_limit {
+                break;
             }
             let count = node.count[c];
             if count == 0 {
-                if next.is_none() {
-                    next = Some(node.child[c]);
-                } else {
-                    stack[sp] = (node.child[c], t_enter[c]);
-                    sp += 1;
-                }
                 continue;
             }
             for k in node.child[c]..node.child[c] + count {
@@ -380,21 +440,27 @@ fn traverse(
                 }
             }
         }
-        // Descend into the first interior child, or pop the most recently pushed one that the
+        let mut next: Option<(u32, f32)> = None;
+        for key in order.into_iter().rev() {
+            let c = slot(key);
+            if t_enter[c] < 0.0 || node.count[c] != 0 || t_enter[c] > t_limit {
+                continue;
+            }
+            if let Some(farther) = next {
+                stack.push(farther);
+            }
+            next = Some((node.child[c], t_enter[c]));
+        }
+        // Descend into the nearest interior child, or pop the most recently pushed one that the
         // ray still enters before t_limit.
-        if next.is_none() {
-            while sp > 0 {
-                sp -= 1;
-                if stack[sp].1 <= t_limit {
-                    next = Some(stack[sp].0);
-                    break;
-                }
+        while next.is_none() {
+            match stack.pop() {
+                Some((n, t)) if t <= t_limit => next = Some((n, t)),
+                Some(_) => {}
+                None => return,
             }
         }
-        match next {
-            Some(n) => current = n,
-            None => return,
-        }
+        current = next.map_or(0, |(n, _)| n);
     }
 }
 
@@ -437,10 +503,10 @@ mod tests {
         }
     }
 
-    /// `depth` is the traversal stack's high-water mark: checked against the largest stack a
-    /// near-first traversal actually reaches over many rays.
+    /// `stack_size` bounds the traversal stack: checked against the largest stack the
+    /// traversal's pushes reach over every node of a tree of 500 triangles.
     #[test]
-    fn depth_bounds_the_traversal_stack() {
+    fn stack_size_bounds_the_traversal_stack() {
         use crate::sampling::pcg4d;
         let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 3, 4])[0]);
         let tris: Vec<Triangle> = (0..500u32)
@@ -451,46 +517,66 @@ mod tests {
             })
             .collect();
         let (nodes, _) = build(&tris, &[]);
-        let depth = depth(&nodes);
-        // Replay the traversal of `traverse` with every box hit (the worst case), taking
-        // either child as the nearer one by a pattern of bits.
+        let bound = stack_size(&nodes);
+        // Replay the traversal's pushes with every box hit (the worst case): each node pushes
+        // all its interior children but one.
         let mut worst = 0;
-        for pattern in 0..8u32 {
-            let mut stack = vec![];
-            let mut current = 0usize;
-            let mut visits = 0u32;
-            loop {
-                let node = &nodes[current];
-                visits += 1;
-                let near = ((pattern >> (visits % 3)) & 1) as usize;
-                let mut next = None;
-                for c in [near, 1 - near] {
-                    if node.count[c] == 0 {
-                        if next.is_none() {
-                            next = Some(node.child[c] as usize);
-                        } else {
-                            stack.push(node.child[c] as usize);
-                            worst = worst.max(stack.len());
-                        }
+        let mut stack = vec![];
+        let mut current = 0usize;
+        let mut visits = 0;
+        loop {
+            visits += 1;
+            let node = &nodes[current];
+            let mut next = None;
+            for c in 0..4 {
+                if node.count[c] == 0 {
+                    if let Some(n) = next.replace(node.child[c] as usize) {
+                        stack.push(n);
+                        worst = worst.max(stack.len());
                     }
                 }
-                if let Some(n) = next {
-                    current = n;
+            }
+            match next.or_else(|| stack.pop()) {
+                Some(n) => current = n,
+                None => break,
+            }
+        }
+        assert_eq!(visits, nodes.len(), "every node is visited once");
+        assert!(worst <= bound, "stack reached {worst}, bound {bound}");
+        assert!(bound <= STACK_SIZE);
+    }
+
+    /// Every primitive is in exactly one leaf, and every child box contains its primitives.
+    #[test]
+    fn leaves_partition_the_primitives_inside_their_boxes() {
+        use crate::sampling::pcg4d;
+        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 5, 6])[0]);
+        let tris: Vec<Triangle> = (0..300u32)
+            .map(|i| {
+                let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 10.0;
+                let v = |k| (c + Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2))).into();
+                tri(v(3), v(6), v(9))
+            })
+            .collect();
+        let (nodes, prims) = build(&tris, &[]);
+        let mut seen = vec![0; tris.len()];
+        for n in &nodes {
+            for c in 0..4 {
+                if n.count[c] == 0 || n.count[c] == EMPTY_SLOT {
                     continue;
                 }
-                match stack.pop() {
-                    Some(n) => current = n,
-                    None => break,
+                let (lo, hi) = n.child_bounds(c);
+                for k in n.child[c]..n.child[c] + n.count[c] {
+                    let t = &tris[prims[k as usize] as usize];
+                    seen[prims[k as usize] as usize] += 1;
+                    for v in [t.v0, t.v1, t.v2] {
+                        let v = Vec3::from(v);
+                        assert!(v.cmpge(lo).all() && v.cmple(hi).all());
+                    }
                 }
             }
-            assert_eq!(visits as usize, nodes.len(), "every node is visited once");
         }
-        assert!(worst <= depth, "stack reached {worst}, depth {depth}");
-        assert!(
-            worst >= depth - 2,
-            "depth {depth} is a loose bound ({worst})"
-        );
-        assert!(depth < STACK_SIZE);
+        assert!(seen.iter().all(|&k| k == 1));
     }
 
     /// The BVH must find exactly what testing every primitive finds.

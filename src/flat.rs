@@ -73,35 +73,39 @@ pub struct Emitter {
     pub pmf: f32,
 }
 
-/// An interior BVH node holding the boxes of its two children side by side, in depth-first
-/// order from the root (node 0). The boxes are stored as a structure of arrays, one row per axis
-/// of (min of child 0, min of child 1, max of child 0, max of child 1), so that one four-wide
-/// operation per axis tests both children (on the CPU in SSE/NEON lanes, in WGSL as `vec4<f32>`)
-/// and one node fetch serves both box tests, the layout of Aila and Laine's GPU traversal
-/// ("Understanding the Efficiency of Ray Traversal on GPUs", 2009). Leaves are not nodes: a
-/// child with `count[c] > 0` is a leaf of `count[c]` entries of `prims` from `child[c]`; a child
-/// with `count[c] == 0` is the interior node `child[c]`. Four vec4s.
+/// A BVH node with up to four children (a "BVH4", as Embree and pbrt-v4's wide variants build),
+/// in depth-first order from the root (node 0). The children's boxes are stored as a structure
+/// of arrays, one row per plane, so that one four-wide operation per plane tests all four
+/// children (on the CPU in SSE/NEON lanes, in WGSL as `vec4<f32>`) and one node fetch serves all
+/// four box tests. Leaves are not nodes: per child slot c, `count[c]` > 0 is a leaf of
+/// `count[c]` entries of `prims` from `child[c]`, `count[c]` == 0 is the interior node
+/// `child[c]`, and `count[c]` == [`EMPTY_SLOT`] is an unused slot. Eight vec4s.
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct BvhNode {
-    /// (min x of child 0, min x of child 1, max x of child 0, max x of child 1).
-    pub x: [f32; 4],
-    /// The same for y.
-    pub y: [f32; 4],
-    /// The same for z.
-    pub z: [f32; 4],
+    /// Minimum x of the four children's boxes.
+    pub min_x: [f32; 4],
+    /// Maximum x of the four children's boxes.
+    pub max_x: [f32; 4],
+    pub min_y: [f32; 4],
+    pub max_y: [f32; 4],
+    pub min_z: [f32; 4],
+    pub max_z: [f32; 4],
     /// Per child: an interior node's index, or a leaf's first entry in `prims`.
-    pub child: [u32; 2],
-    /// Per child: the leaf's number of primitives, or 0 for an interior node.
-    pub count: [u32; 2],
+    pub child: [u32; 4],
+    /// Per child: the leaf's number of primitives, 0 for an interior node, or [`EMPTY_SLOT`].
+    pub count: [u32; 4],
 }
 
+/// `BvhNode::count` of a child slot that holds nothing (a node with fewer than four children).
+pub const EMPTY_SLOT: u32 = u32::MAX;
+
 impl BvhNode {
-    /// The box of child `c` (0 or 1) as (min, max).
+    /// The box of child slot `c` as (min, max).
     pub fn child_bounds(&self, c: usize) -> (Vec3, Vec3) {
         (
-            Vec3::new(self.x[c], self.y[c], self.z[c]),
-            Vec3::new(self.x[2 + c], self.y[2 + c], self.z[2 + c]),
+            Vec3::new(self.min_x[c], self.min_y[c], self.min_z[c]),
+            Vec3::new(self.max_x[c], self.max_y[c], self.max_z[c]),
         )
     }
 }
@@ -204,8 +208,13 @@ impl FlatScene {
     /// The bounding box of the whole scene: the union of the root's children.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let root = &self.nodes[0];
-        let ((a_min, a_max), (b_min, b_max)) = (root.child_bounds(0), root.child_bounds(1));
-        (a_min.min(b_min), a_max.max(b_max))
+        (0..4)
+            .filter(|&c| root.count[c] != EMPTY_SLOT)
+            .map(|c| root.child_bounds(c))
+            .fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+            )
     }
 }
 
@@ -261,6 +270,6 @@ mod tests {
         assert_eq!(std::mem::size_of::<Sphere>(), 32);
         assert_eq!(std::mem::size_of::<Material>(), 32);
         assert_eq!(std::mem::size_of::<Emitter>(), 16);
-        assert_eq!(std::mem::size_of::<BvhNode>(), 64);
+        assert_eq!(std::mem::size_of::<BvhNode>(), 128);
     }
 }

@@ -9,8 +9,8 @@
 //! that computed it. No fixed epsilon, and nothing proportional to the scene's size: the offset
 //! scales with the magnitude of the coordinates, which is what far-from-origin scenes need.
 
-use crate::flat::{BvhNode, Sphere, Triangle};
-use glam::{Vec3, Vec4, Vec4Swizzles};
+use crate::flat::{BvhNode, Sphere, Triangle, EMPTY_SLOT};
+use glam::{Vec3, Vec4};
 
 /// Half an ulp of 1.0 in f32: the relative rounding error of one operation.
 pub const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
@@ -229,29 +229,36 @@ pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
     (p, p_err, local / sphere.radius)
 }
 
-/// The slab test (Kay and Kajiya) against both children's boxes of a BVH node at once, with
+/// The slab test (Kay and Kajiya) against the four children's boxes of a BVH node at once, with
 /// pbrt-v4's 1 + 2 gamma(3) widening of the far distance so that rounding never culls a box the
-/// ray touches. Returns, per child, the distance at which the ray enters its box (0 when it
-/// starts inside), or -1 when it misses the box or enters it beyond `t_max` (-1, not infinity,
-/// because WGSL has no infinity): the traversal visits the nearer child first and drops a child
-/// that a closer hit has since passed.
-///
-/// Each row of the node is (min 0, min 1, max 0, max 1) along one axis, so `t` holds the slab
-/// distances of both children and swapping its halves pairs each min plane with its max plane.
+/// ray touches. Returns, per child slot, the distance at which the ray enters its box (0 when it
+/// starts inside), or -1 when it misses the box, enters it beyond `t_max` or the slot is empty
+/// (-1, not infinity, because WGSL has no infinity).
 #[inline]
-pub fn intersect_aabb_pair(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32; 2] {
-    let tx = (Vec4::from(node.x) - Vec4::splat(o.x)) * inv_d.x;
-    let ty = (Vec4::from(node.y) - Vec4::splat(o.y)) * inv_d.y;
-    let tz = (Vec4::from(node.z) - Vec4::splat(o.z)) * inv_d.z;
-    let (sx, sy, sz) = (tx.zwxy(), ty.zwxy(), tz.zwxy());
-    let t_near = tx.min(sx).max(ty.min(sy)).max(tz.min(sz)).max(Vec4::ZERO);
-    let t_far = tx.max(sx).min(ty.max(sy)).min(tz.max(sz)) * (1.0 + 2.0 * gamma(3));
+pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32; 4] {
+    let slab = |lo: [f32; 4], hi: [f32; 4], o: f32, inv_d: f32| {
+        let t_lo = (Vec4::from(lo) - Vec4::splat(o)) * inv_d;
+        let t_hi = (Vec4::from(hi) - Vec4::splat(o)) * inv_d;
+        (t_lo.min(t_hi), t_lo.max(t_hi))
+    };
+    let (near_x, far_x) = slab(node.min_x, node.max_x, o.x, inv_d.x);
+    let (near_y, far_y) = slab(node.min_y, node.max_y, o.y, inv_d.y);
+    let (near_z, far_z) = slab(node.min_z, node.max_z, o.z, inv_d.z);
+    let t_near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
+    let t_far = far_x.min(far_y).min(far_z) * (1.0 + 2.0 * gamma(3));
     let t = Vec4::select(
         t_near.cmple(t_far.min(Vec4::splat(t_max))),
         t_near,
         Vec4::splat(-1.0),
-    );
-    [t.x, t.y]
+    )
+    .to_array();
+    std::array::from_fn(|c| {
+        if node.count[c] == EMPTY_SLOT {
+            -1.0
+        } else {
+            t[c]
+        }
+    })
 }
 
 /// 1/d per component, with zero components nudged to 1e-30 (keeping the sign) so that the slab

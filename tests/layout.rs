@@ -66,9 +66,12 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             pmf
         }),
         rust_layout!(BvhNode {
-            x,
-            y,
-            z,
+            min_x,
+            max_x,
+            min_y,
+            max_y,
+            min_z,
+            max_z,
             child,
             count
         }),

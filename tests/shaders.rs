@@ -24,9 +24,9 @@ fn the_kernel_parses_and_validates_with_naga_in_both_residencies() {
         spheres: 1,
         materials: 9,
         emitters: 2,
-        nodes: 15,
+        nodes: 7,
         prims: 7,
-        bvh_depth: 5,
+        stack_size: 9,
     };
     for residency in [Residency::Storage, Residency::Uniform] {
         let src = source(residency, lengths);

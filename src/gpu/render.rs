@@ -125,7 +125,7 @@ pub fn array_lengths(scene: &FlatScene) -> ArrayLengths {
         emitters: scene.emitters.len(),
         nodes: scene.nodes.len(),
         prims: scene.prims.len().div_ceil(4),
-        bvh_depth: crate::bvh::depth(&scene.nodes),
+        stack_size: crate::bvh::stack_size(&scene.nodes),
     }
 }
 

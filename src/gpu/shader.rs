@@ -38,8 +38,8 @@ pub fn all_files() -> Vec<&'static str> {
 }
 
 /// What the kernel is specialised to: the lengths of the scene arrays (the uniform bindings'
-/// `LEN_*` constants) and the depth of the BVH (`STACK_SIZE` in bvh.wgsl: the traversal pushes
-/// at most one node per level, and lavapipe keeps the private stack in
+/// `LEN_*` constants) and the traversal stack's size (`STACK_SIZE` in bvh.wgsl: the traversal
+/// pushes at most three nodes per level, and lavapipe keeps the private stack in
 /// registers, so a stack no deeper than the tree runs markedly faster there; docs/gpu.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ArrayLengths {
@@ -50,8 +50,8 @@ pub struct ArrayLengths {
     pub nodes: usize,
     /// In vec4<u32>s (four primitive references each).
     pub prims: usize,
-    /// Nodes on the longest path from the root (`bvh::depth`, a bound on the traversal stack).
-    pub bvh_depth: usize,
+    /// A bound on the traversal stack (`bvh::stack_size`: three entries per level).
+    pub stack_size: usize,
 }
 
 /// Replaces the value of every `const NAME: u32 = ...;` line whose NAME is in `values`.
@@ -81,7 +81,7 @@ pub fn source(residency: Residency, lengths: ArrayLengths) -> String {
         ("LEN_EMITTERS", lengths.emitters),
         ("LEN_NODES", lengths.nodes),
         ("LEN_PRIMS", lengths.prims),
-        ("STACK_SIZE", lengths.bvh_depth),
+        ("STACK_SIZE", lengths.stack_size),
     ];
     let bindings = match residency {
         Residency::Storage => BINDINGS_STORAGE,
