@@ -32,25 +32,31 @@ pub struct Ray {
 /// The next f32 above `v` (pbrt's `NextFloatUp`), through the bits, exactly as WGSL does it.
 #[inline]
 pub fn next_float_up(v: f32) -> f32 {
-    if v.is_infinite() && v > 0.0 {
+    if v == f32::INFINITY {
         return v;
     }
-    let v = if v == -0.0 { 0.0 } else { v };
-    let bits = v.to_bits();
-    let bits = if v >= 0.0 { bits + 1 } else { bits - 1 };
-    f32::from_bits(bits)
+    // -0 and +0 both step to the smallest positive subnormal.
+    let bits = if v == 0.0 { 0 } else { v.to_bits() };
+    f32::from_bits(if v >= 0.0 {
+        bits.wrapping_add(1)
+    } else {
+        bits.wrapping_sub(1)
+    })
 }
 
 /// The next f32 below `v` (pbrt's `NextFloatDown`).
 #[inline]
 pub fn next_float_down(v: f32) -> f32 {
-    if v.is_infinite() && v < 0.0 {
+    if v == f32::NEG_INFINITY {
         return v;
     }
-    let v = if v == 0.0 { -0.0 } else { v };
-    let bits = v.to_bits();
-    let bits = if v > 0.0 { bits - 1 } else { bits + 1 };
-    f32::from_bits(bits)
+    // +0 and -0 both step to the smallest negative subnormal.
+    let bits = if v == 0.0 { 0x8000_0000 } else { v.to_bits() };
+    f32::from_bits(if v > 0.0 {
+        bits.wrapping_sub(1)
+    } else {
+        bits.wrapping_add(1)
+    })
 }
 
 /// A point that is certainly on the side of the surface that direction `w` leaves to:

@@ -24,4 +24,6 @@ mod merge;
 mod precision;
 mod reintersect;
 mod shaders;
+mod stability_caustic;
+mod stability_tiny_light;
 mod standard_error;

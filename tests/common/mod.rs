@@ -9,6 +9,8 @@ use hexray::flat::FlatScene;
 use hexray::scene::Scene;
 use std::path::{Path, PathBuf};
 
+pub mod reference;
+
 /// A path under the repository root.
 pub fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)

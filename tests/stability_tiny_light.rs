@@ -1,0 +1,88 @@
+//! Tiny light: `tncg15_room` with its light shrunk to 1/100 of the area and its radiance raised
+//! 100-fold (`scenes/stability/tiny_light_1e2.json`). Next-event estimation keeps the direct
+//! light as clean as before, but paths diffuse -> mirror -> light, which only BSDF sampling
+//! finds, become 100 times rarer and brighter: the property is that the estimate stays unbiased.
+//!
+//! Statistic: each channel's image mean against a long CPU reference of the same scene (32x32,
+//! 65536 spp, another seed; `docs/stability.sh references`), within 4 combined standard errors
+//! (false alarm 6e-5 per channel). Only the image mean, as for the caustic: the mirror paths to
+//! the light are too rare for a small block's sample variance to be right at a test's sample
+//! count, while the image's 4 million samples hold hundreds of them. The light shrunk
+//! 10^4-fold is not tested: at any sample count that fits a test its expected number of mirror
+//! paths to the light is below one, so no finite-sample statistic can both hold its false-alarm
+//! rate and have power there (docs/stability.md measures its error against time instead).
+//! Power: the usual biased answer to fireflies, clamping each sample's radiance (here at 100, 5 %
+//! of the light's radiance, which also clips the light where the camera sees it), is rejected.
+//! (Mirrors 3 % too dark, the course report's bug, move this image's mean less than its
+//! heavy-tailed standard error; `stability_mirror.rs` catches those.)
+
+use crate::common::reference::{mean_z, read};
+use crate::common::*;
+use hexray::camera::Camera;
+use hexray::cpu::{trace_path, Faults};
+use hexray::film::Film;
+use hexray::sampling::Sampler;
+use hexray::stats::MeanImage;
+use rayon::prelude::*;
+
+const SCENE: &str = "scenes/stability/tiny_light_1e2.json";
+const REFERENCE: &str = "tests/data/references/stability/tiny_light_1e2_32.exr";
+
+fn agrees(z: [f64; 3]) -> bool {
+    z.iter().all(|z| z.abs() <= 4.0)
+}
+
+#[test]
+fn light_100_times_smaller_is_unbiased_on_the_cpu() {
+    let film = render_cpu(SCENE, 32, 32, 4096, 41, Faults::NONE);
+    assert_eq!(film.dropped(), 0, "non-finite samples");
+    let z = mean_z(
+        "tiny light 1e2, CPU",
+        &MeanImage::from_film(&film),
+        &read(REFERENCE),
+    );
+    assert!(agrees(z), "z {z:?}");
+}
+
+/// The GPU renders 16x16 pixels (lavapipe is slow): the same image mean, from 1 million samples.
+#[test]
+fn light_100_times_smaller_is_unbiased_on_the_gpu() {
+    let Some(gpu) = gpu() else { return };
+    let film = render_gpu(gpu, SCENE, 16, 16, 4096, 42, Faults::NONE);
+    assert_eq!(film.dropped(), 0, "non-finite samples");
+    let z = mean_z(
+        "tiny light 1e2, GPU",
+        &MeanImage::from_film(&film),
+        &read(REFERENCE),
+    );
+    assert!(agrees(z), "z {z:?}");
+}
+
+/// A renderer that clamps every sample to at most `clamp` per channel: the CPU integrator's
+/// samples, clamped before they reach the film.
+fn render_clamped(width: u32, height: u32, spp: u32, seed: u32, clamp: f32) -> Film {
+    let (scene, flat) = load(SCENE);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut film = Film::new(width, height);
+    film.pixels.par_iter_mut().enumerate().for_each(|(i, px)| {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        let mut rays = 0;
+        for s in 0..spp {
+            let sampler = Sampler::new(seed, i as u32, s);
+            let l = trace_path(&flat, &camera, x, y, &sampler, 1, Faults::NONE, &mut rays);
+            px.add(l.min(glam::Vec3::splat(clamp)));
+        }
+    });
+    film
+}
+
+#[test]
+fn tiny_light_test_rejects_a_renderer_that_clamps_fireflies() {
+    let film = render_clamped(32, 32, 4096, 41, 100.0);
+    let z = mean_z(
+        "tiny light 1e2, CPU, samples clamped at 100",
+        &MeanImage::from_film(&film),
+        &read(REFERENCE),
+    );
+    assert!(!agrees(z), "clamped fireflies passed: z {z:?}");
+}
