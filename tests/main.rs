@@ -24,4 +24,5 @@ mod merge;
 mod precision;
 mod reintersect;
 mod shaders;
+mod stability_mirror_corridor;
 mod standard_error;
