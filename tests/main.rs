@@ -25,4 +25,5 @@ mod precision;
 mod reintersect;
 mod shaders;
 mod stability_mirror_corridor;
+mod stability_thin;
 mod standard_error;
