@@ -24,6 +24,7 @@ mod merge;
 mod precision;
 mod reintersect;
 mod shaders;
+mod stability_grazing;
 mod stability_mirror_corridor;
 mod stability_thin;
 mod standard_error;
