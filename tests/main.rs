@@ -26,4 +26,7 @@ mod reintersect;
 mod shaders;
 mod stability_caustic;
 mod stability_tiny_light;
+mod stability_grazing;
+mod stability_mirror_corridor;
+mod stability_thin;
 mod standard_error;

@@ -141,3 +141,230 @@ pub fn render_gpu_light_samples(
     r.render(0, spp, &mut film).unwrap();
     film
 }
+
+/// Loads a scene file and applies `change` to its description (move the camera, change a
+/// material, remove a triangle) before validating it again, for tests that need a variant of a
+/// committed scene.
+pub fn load_changed(rel: &str, change: impl FnOnce(&mut hexray::scene::SceneDesc)) -> Scene {
+    let mut scene = Scene::load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
+    change(&mut scene.desc);
+    if let Err(issue) = hexray::scene::validate::validate(&scene.desc) {
+        panic!("{rel} as changed: {}: {}", issue.path, issue.message);
+    }
+    scene
+}
+
+/// [`render_cpu`] of a loaded (possibly changed) scene.
+pub fn render_cpu_scene(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    faults: Faults,
+) -> Film {
+    let flat = FlatScene::build(scene);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut film = Film::new(width, height);
+    render_pass(&flat, &camera, seed, 0, spp, 1, faults, &mut film);
+    film
+}
+
+/// [`render_gpu`] of a loaded (possibly changed) scene.
+pub fn render_gpu_scene(
+    gpu: &hexray::gpu::Gpu,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    faults: Faults,
+) -> Film {
+    let flat = FlatScene::build(scene);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut r = hexray::gpu::GpuRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        &flat,
+        camera,
+        seed,
+        faults,
+        hexray::gpu::Checks::Unchecked,
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+    )
+    .unwrap();
+    let mut film = Film::new(width, height);
+    r.render(0, spp, &mut film).unwrap();
+    film
+}
+
+/// Pixels (x, y) with any non-zero sample: radiance is never negative, so a pixel whose sum is 0
+/// in every channel took only zero samples.
+pub fn lit_pixels(film: &Film) -> Vec<(u32, u32)> {
+    (0..film.height)
+        .flat_map(|y| (0..film.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let p = &film.pixels[(y * film.width + x) as usize];
+            p.sum.iter().any(|&s| s != 0.0)
+        })
+        .collect()
+}
+
+/// A rendered image against an exact expected image, pixel groups (blocks, rows) at a time.
+#[derive(Clone, Debug)]
+pub struct TruthReport {
+    /// Image mean, its standard error, the exact image mean and the z-score, per channel.
+    pub mean: [f64; 3],
+    pub se: [f64; 3],
+    pub exact: [f64; 3],
+    pub z: [f64; 3],
+    /// Group-channels whose exact value is positive, each tested by z = (mean − exact) / s.e.
+    pub tested: usize,
+    /// Those whose two-sided normal p-value is below the Bonferroni threshold alpha / tested.
+    pub rejected: usize,
+    /// The largest |z| among the tested group-channels, with its group and channel.
+    pub worst: (f64, usize, usize),
+    /// Group-channels whose exact value is 0 but which took a non-zero sample.
+    pub light_where_black: usize,
+    pub dropped: u64,
+}
+
+impl TruthReport {
+    /// The image agrees with the exact one: no group beyond the Bonferroni threshold, the image
+    /// mean within 4 s.e. per channel, no light where there can be none, no non-finite sample.
+    pub fn agrees(&self) -> bool {
+        self.rejected == 0
+            && self.z.iter().all(|z| z.abs() <= 4.0)
+            && self.light_where_black == 0
+            && self.dropped == 0
+    }
+
+    pub fn summary(&self) -> String {
+        format!(
+            "image mean {:.5} {:.5} {:.5} ± {:.1e} {:.1e} {:.1e}, exact {:.5} {:.5} {:.5}, \
+             z {:.2} {:.2} {:.2}; {} of {} group-channels rejected (worst z {:.2}, group {} \
+             channel {}); {} lit where exactly black; {} dropped",
+            self.mean[0],
+            self.mean[1],
+            self.mean[2],
+            self.se[0],
+            self.se[1],
+            self.se[2],
+            self.exact[0],
+            self.exact[1],
+            self.exact[2],
+            self.z[0],
+            self.z[1],
+            self.z[2],
+            self.rejected,
+            self.tested,
+            self.worst.0,
+            self.worst.1,
+            self.worst.2,
+            self.light_where_black,
+            self.dropped
+        )
+    }
+}
+
+/// z = (mean − exact) / s.e., with a zero s.e. (a constant estimate) giving 0 when the mean is
+/// exact and an infinite z otherwise.
+fn z_of(mean: f64, exact: f64, var: f64) -> f64 {
+    if var > 0.0 {
+        (mean - exact) / var.sqrt()
+    } else if mean == exact {
+        0.0
+    } else {
+        (mean - exact) * f64::INFINITY
+    }
+}
+
+/// Compares a film with exact per-pixel expectations `exact` (row-major, per channel) over the
+/// pixel groups that `group` assigns (None: the pixel is in no group): each group's mean is the
+/// mean of its pixel means, its variance the sum of their variances over the squared count
+/// (pixels are independent estimates). Group-channels with a positive exact value are tested
+/// with Bonferroni's correction at family level `alpha`; those with exact value 0 must have
+/// taken only zero samples. The image mean is compared too.
+pub fn against_truth(
+    film: &Film,
+    exact: &[[f64; 3]],
+    group: impl Fn(u32, u32) -> Option<usize>,
+    alpha: f64,
+) -> TruthReport {
+    use hexray::stats::normal_two_sided_p;
+    assert_eq!(exact.len(), film.pixels.len());
+    // Per group: the sums of the pixel means, variances and exact values, and the pixel count.
+    #[derive(Clone, Default)]
+    struct Group {
+        mean: [f64; 3],
+        var: [f64; 3],
+        exact: [f64; 3],
+        pixels: f64,
+    }
+    let mut groups: Vec<Group> = Vec::new();
+    let (mut mean, mut var, mut ex) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    let n = film.pixels.len() as f64;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let i = (y * film.width + x) as usize;
+            let (pm, pv) = (film.pixels[i].mean(), film.pixels[i].var_of_mean());
+            for c in 0..3 {
+                mean[c] += pm[c] / n;
+                var[c] += pv[c] / (n * n);
+                ex[c] += exact[i][c] / n;
+            }
+            if let Some(g) = group(x, y) {
+                if g >= groups.len() {
+                    groups.resize(g + 1, Group::default());
+                }
+                let e = &mut groups[g];
+                for c in 0..3 {
+                    e.mean[c] += pm[c];
+                    e.var[c] += pv[c];
+                    e.exact[c] += exact[i][c];
+                }
+                e.pixels += 1.0;
+            }
+        }
+    }
+    let tested = groups
+        .iter()
+        .map(|g| (0..3).filter(|&c| g.exact[c] > 0.0).count())
+        .sum::<usize>();
+    let (mut rejected, mut light_where_black, mut worst) = (0, 0, (0.0f64, 0, 0));
+    for (gi, g) in groups.iter().enumerate() {
+        if g.pixels == 0.0 {
+            continue;
+        }
+        let k = g.pixels;
+        for c in 0..3 {
+            let (m, v, e) = (g.mean[c] / k, g.var[c] / (k * k), g.exact[c] / k);
+            if e == 0.0 {
+                if m != 0.0 {
+                    light_where_black += 1;
+                }
+                continue;
+            }
+            let z = z_of(m, e, v);
+            if z.abs() > worst.0.abs() || z.is_nan() {
+                worst = (z, gi, c);
+            }
+            // A NaN z (a NaN mean) is rejected too.
+            let p = normal_two_sided_p(z);
+            if p.is_nan() || p < alpha / tested as f64 {
+                rejected += 1;
+            }
+        }
+    }
+    TruthReport {
+        mean,
+        se: var.map(f64::sqrt),
+        exact: ex,
+        z: [0, 1, 2].map(|c| z_of(mean[c], ex[c], var[c])),
+        tested,
+        rejected,
+        worst,
+        light_where_black,
+        dropped: film.dropped(),
+    }
+}
