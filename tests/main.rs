@@ -24,4 +24,7 @@ mod merge;
 mod precision;
 mod reintersect;
 mod shaders;
+mod stability_far_from_origin;
+mod stability_mirror;
+mod stability_shadow_colour;
 mod standard_error;
