@@ -36,6 +36,9 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
     // specular bounce (no light-sampling strategy competes there).
     var bsdf_pdf = 0.0;
     var bounce = 0u;
+    // `Faults::grey_indirect` only: the radiance gathered before the first diffuse bounce.
+    var before_indirect = vec3<f32>(0.0);
+    var greying = false;
 
     loop {
         // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
@@ -111,6 +114,10 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
         }
         eta_scale *= bs.eta2;
         bsdf_pdf = bs.pdf;
+        if frame.grey_indirect != 0u && bs.pdf > 0.0 && !greying {
+            greying = true;
+            before_indirect = radiance;
+        }
         if max_element(throughput) <= 0.0 {
             break;
         }
@@ -130,6 +137,10 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
         if bounce >= frame.max_bounces {
             break;
         }
+    }
+    if greying {
+        let indirect = radiance - before_indirect;
+        radiance = before_indirect + vec3<f32>((indirect.x + indirect.y + indirect.z) / 3.0);
     }
     return radiance;
 }

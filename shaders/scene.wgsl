@@ -74,7 +74,8 @@ struct Frame {
     specular_scale: f32,
     // Shadow rays per diffuse vertex (`--light-samples`).
     light_samples: u32,
-    pad: u32,
+    // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
+    grey_indirect: u32,
 }
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).

@@ -96,7 +96,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             max_bounces,
             specular_scale,
             light_samples,
-            pad
+            grey_indirect
         }),
         rust_layout!(PixelSums {
             sum,

@@ -29,4 +29,7 @@ mod stability_tiny_light;
 mod stability_grazing;
 mod stability_mirror_corridor;
 mod stability_thin;
+mod stability_far_from_origin;
+mod stability_mirror;
+mod stability_shadow_colour;
 mod standard_error;

@@ -37,12 +37,17 @@ pub struct Faults {
     pub specular_scale: f32,
     /// Ends every path after this many bounces (`u32::MAX` when correct: no maximum depth).
     pub max_bounces: u32,
+    /// Replaces the light a path gathers after its first diffuse bounce by its grey (the mean
+    /// of its three channels): a renderer whose indirect light, and so its shadows, lose colour
+    /// (false when correct).
+    pub grey_indirect: bool,
 }
 
 impl Faults {
     pub const NONE: Faults = Faults {
         specular_scale: 1.0,
         max_bounces: u32::MAX,
+        grey_indirect: false,
     };
 }
 
@@ -82,6 +87,9 @@ pub fn trace_path(
     // specular bounce (no light-sampling strategy competes there).
     let mut bsdf_pdf = 0.0f32;
     let mut bounce = 0u32;
+    // `Faults::grey_indirect` only: the radiance gathered before the first diffuse bounce, or
+    // None until that bounce.
+    let mut before_indirect: Option<Vec3> = None;
 
     loop {
         // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
@@ -163,6 +171,9 @@ pub fn trace_path(
         }
         eta_scale *= bs.eta2;
         bsdf_pdf = bs.pdf;
+        if faults.grey_indirect && bs.pdf > 0.0 && before_indirect.is_none() {
+            before_indirect = Some(radiance);
+        }
         if throughput.max_element() <= 0.0 {
             break;
         }
@@ -185,6 +196,10 @@ pub fn trace_path(
         if bounce >= faults.max_bounces {
             break;
         }
+    }
+    if let Some(before) = before_indirect {
+        let indirect = radiance - before;
+        radiance = before + Vec3::splat((indirect.x + indirect.y + indirect.z) / 3.0);
     }
     radiance
 }

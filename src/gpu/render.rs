@@ -29,7 +29,8 @@ pub struct Frame {
     pub specular_scale: f32,
     /// Shadow rays per diffuse vertex (`--light-samples`, at least 1).
     pub light_samples: u32,
-    pub pad: u32,
+    /// `Faults::grey_indirect` as 0 or 1 (test-only).
+    pub grey_indirect: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -258,7 +259,7 @@ impl GpuRenderer {
             max_bounces: faults.max_bounces,
             specular_scale: faults.specular_scale,
             light_samples: 1,
-            pad: 0,
+            grey_indirect: faults.grey_indirect as u32,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),

@@ -2,6 +2,8 @@
 //! statistical expectations.
 #![allow(dead_code)]
 
+pub mod parity;
+
 use hexray::camera::Camera;
 use hexray::cpu::{render_pass, Faults};
 use hexray::film::Film;
