@@ -9,7 +9,7 @@ use crate::geometry::{
     triangle_normal, triangle_point, Ray, SurfaceHit,
 };
 use arrayvec::ArrayVec;
-use glam::{BVec4A, Vec3, Vec4, Vec4Swizzles};
+use glam::Vec3;
 
 /// At most this many primitives in a leaf (pbrt-v4's `maxPrimsInNode` default is 255 for its
 /// general BVH; small leaves suit a shader that visits one node per loop iteration).
@@ -347,52 +347,13 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
     hit
 }
 
-/// The sort key of a missed child slot: a finite float above every entry distance.
-const MISS_KEY: f32 = f32::MAX;
-
-/// Child slots ordered by entry distance, nearest first, misses last. Each slot's key is its
-/// entry distance with the slot number in its two lowest mantissa bits (a hit's t >= 0, so keys
-/// order as the distances rounded down to 4 ulp do), or [`MISS_KEY`]; five compare-exchanges
-/// sort the four keys (a sorting network: three rounds of four-wide min/max, no branches).
-#[inline]
-fn nearest_first(t_enter: [f32; 4]) -> [f32; 4] {
-    let key = |c: usize| {
-        let t = if t_enter[c] < 0.0 {
-            MISS_KEY
-        } else {
-            t_enter[c]
-        };
-        f32::from_bits((t.to_bits() & !3) | c as u32)
-    };
-    let k = Vec4::new(key(0), key(1), key(2), key(3));
-    // (0, 1) and (2, 3); then (0, 2) and (1, 3); then (1, 2).
-    let (p, q) = (k.yxwz(), BVec4A::new(true, false, true, false));
-    let k = Vec4::select(q, k.min(p), k.max(p));
-    let (p, q) = (k.zwxy(), BVec4A::new(true, true, false, false));
-    let k = Vec4::select(q, k.min(p), k.max(p));
-    let p = k.xzyw();
-    Vec4::select(BVec4A::new(true, true, false, false), k.min(p), k.max(p)).to_array()
-}
-
-/// The child slot of a sort key.
-#[inline]
-fn slot(key: f32) -> usize {
-    (key.to_bits() & 3) as usize
-}
-
-/// The entry distance of a sort key, rounded down by up to 3 ulp.
-#[inline]
-fn key_distance(key: f32) -> f32 {
-    f32::from_bits(key.to_bits() & !3)
-}
-
-/// One traversal for both modes. At each node the four children's boxes are tested at once and
-/// the hit children sorted by entry distance. The leaves among them are tested first, nearest
-/// first, so that their hits lower t_limit before anything is pushed; then the nearest interior
-/// child is visited next and the others are pushed farthest first (so nearer ones pop first),
-/// each with its entry distance: a missed child is never pushed and a pushed one that a closer
-/// hit has since passed is dropped when popped. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)`
-/// decides what a hit means; it returns true to stop at once (any-hit).
+/// One traversal for both modes. At each node the four children's boxes are tested at once. The
+/// leaves among the hit children are tested first, so that their hits lower t_limit before
+/// anything is pushed; then the nearest hit interior child is visited next and the others are
+/// pushed with their entry distances: a missed child is never pushed and a pushed one that a
+/// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
+/// distance: sorting all four costs more than the culling it buys. `on_hit(prim, t, t_err, b1,
+/// b2, &mut t_limit)` decides what a hit means; it returns true to stop at once (any-hit).
 #[inline]
 fn traverse(
     scene: &FlatScene,
@@ -408,20 +369,24 @@ fn traverse(
     loop {
         let node = &scene.nodes[current as usize];
         let t_enter = intersect_aabb4(node, ray.o, inv_d, t_limit);
-        let order = nearest_first(t_enter);
-        for key in order {
-            let c = slot(key);
-            // In key order, after a miss or a key past t_limit come only misses and farther
-            // boxes (a key is its distance rounded down, so none is skipped that the ray enters
-            // before t_limit).
-            if t_enter[c] < 0.0 || key_distance(key) > t_limit {
-                break;
+        // Bit c set: the ray enters child c's box (a leaf's in `leaves`, a node's in `inner`).
+        let (mut leaves, mut inner) = (0u32, 0u32);
+        for c in 0..4 {
+            let hit = u32::from(t_enter[c] >= 0.0) << c;
+            if node.count[c] == 0 {
+                inner |= hit;
+            } else {
+                leaves |= hit;
             }
-            let count = node.count[c];
-            if count == 0 {
+        }
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize;
+            leaves &= leaves - 1;
+            // A box that a hit in another leaf has since passed.
+            if t_enter[c] > t_limit {
                 continue;
             }
-            for k in node.child[c]..node.child[c] + count {
+            for k in node.child[c]..node.child[c] + node.count[c] {
                 let prim = scene.prims[k as usize];
                 let stop = if prim & PRIM_SPHERE_BIT == 0 {
                     match intersect_triangle(ray, &scene.triangles[prim as usize]) {
@@ -441,15 +406,21 @@ fn traverse(
             }
         }
         let mut next: Option<(u32, f32)> = None;
-        for key in order.into_iter().rev() {
-            let c = slot(key);
-            if t_enter[c] < 0.0 || node.count[c] != 0 || t_enter[c] > t_limit {
+        while inner != 0 {
+            let c = inner.trailing_zeros() as usize;
+            inner &= inner - 1;
+            if t_enter[c] > t_limit {
                 continue;
             }
-            if let Some(farther) = next {
-                stack.push(farther);
+            let child = (node.child[c], t_enter[c]);
+            match next {
+                Some(n) if n.1 <= child.1 => stack.push(child),
+                Some(n) => {
+                    stack.push(n);
+                    next = Some(child);
+                }
+                None => next = Some(child),
             }
-            next = Some((node.child[c], t_enter[c]));
         }
         // Descend into the nearest interior child, or pop the most recently pushed one that the
         // ray still enters before t_limit.

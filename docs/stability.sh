@@ -1,0 +1,150 @@
+#!/usr/bin/env bash
+# Regenerates docs/stability.md: for each stability scene (scenes/stability/), a CPU and a GPU
+# picture side by side, the property its test states with both backends' measured values (the
+# tests' own output), and the relMSE-against-time curve of both backends.
+#
+#   docs/stability.sh references   # the long CPU references (tests/data/references/stability/;
+#                                  # about an hour on 2 cores: the 10^4 tiny light dominates)
+#   docs/stability.sh report       # pictures, curves, test values -> docs/stability.md (~25 min)
+#
+# HEXRAY (default target/release/hexray) is the binary; build it first with
+# `cargo build --release`. The GPU backend runs on whatever adapter wgpu finds (lavapipe here).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+hexray=${HEXRAY:-target/release/hexray}
+refs=tests/data/references/stability
+out=docs/stability
+# Every curve and reference is 32x32 pixels (the tests' size); pictures are 128x128.
+size=32
+# Seeds: references 1000000 (apart from every test's and picture's seed).
+ref_seed=1000000
+
+# name, scene file, reference spp
+reference_list() {
+    cat <<'EOF'
+caustic scenes/stability/caustic.json 65536
+tiny_light_1e2 scenes/stability/tiny_light_1e2.json 65536
+tiny_light_1e0 scenes/tncg15_room.json 65536
+tiny_light_1e4 scenes/stability/tiny_light_1e4.json 262144
+grazing scenes/stability/grazing.json 16384
+mirror_corridor scenes/stability/mirror_corridor.json 16384
+thin_slab scenes/stability/thin_slab.json 16384
+EOF
+}
+
+references() {
+    mkdir -p "$refs"
+    reference_list | while read -r name scene spp; do
+        echo "== $name: $spp spp"
+        "$hexray" reference "$scene" --backend cpu --width $size --height $size --spp "$spp" \
+            --seed $ref_seed --out "$refs/${name}_32.exr" --quiet
+    done
+}
+
+# The value of a curve at a time budget: the relMSE of the last wave finished within it.
+relmse_at() {
+    awk -F, -v b="$2" -v t="$3" 'NR > 1 && $2 == "hexray " b && $5 <= t { r = $7; s = $5; n = $4 }
+        END { if (r == "") print "-"; else printf "%s (%d spp, %.1f s)", r, n, s }' "$1"
+}
+
+# name, scene, reference (for the curve; "-" for none), what the picture shows
+report_list() {
+    cat <<'EOF'
+caustic scenes/stability/caustic.json caustic_32.exr
+tiny_light_1e0 scenes/tncg15_room.json tiny_light_1e0_32.exr
+tiny_light_1e2 scenes/stability/tiny_light_1e2.json tiny_light_1e2_32.exr
+tiny_light_1e4 scenes/stability/tiny_light_1e4.json tiny_light_1e4_32.exr
+grazing scenes/stability/grazing.json grazing_32.exr
+far_from_origin_1e3 scenes/stability/tncg15_translated_1e3.json tiny_light_1e0_32.exr
+far_from_origin_1e4 scenes/stability/tncg15_translated_1e4.json tiny_light_1e0_32.exr
+far_from_origin_1e5 scenes/stability/tncg15_translated_1e5.json tiny_light_1e0_32.exr
+far_from_origin_1e6 scenes/stability/tncg15_translated_1e6.json tiny_light_1e0_32.exr
+mirror_corridor scenes/stability/mirror_corridor.json mirror_corridor_32.exr
+thin_slab scenes/stability/thin_slab.json thin_slab_32.exr
+thin_box scenes/stability/thin_box.json -
+mirror_doubled scenes/stability/tncg15_mirror_doubled.json -
+shadow_colour scenes/stability/tncg15_umbra_view.json -
+EOF
+}
+
+report() {
+    mkdir -p "$out"
+    local adapter
+    adapter=$("$hexray" info 2>/dev/null | sed -n 's/^\[0\] \(.*\) (.*/\1/p' | head -1)
+    # The tests' measured values, one module at a time, in test order.
+    cargo test --release --test tests stability_ -- --nocapture --test-threads 1 \
+        > "$out/tests.log" 2>&1 || true
+    {
+        echo "# Stability where methods fail"
+        echo
+        echo "Regenerate with \`docs/stability.sh report\` (references: \`docs/stability.sh references\`)."
+        echo "Measured $(date -u +%Y-%m-%d) on $(nproc) cores ($(sed -n 's/^model name\s*: //p' /proc/cpuinfo | head -1)); GPU backend on ${adapter:-no adapter}."
+        echo "Pictures: 128x128, 64 spp per backend (seed 3). Curves: ${size}x${size} against a long CPU reference"
+        echo "(\`$refs/\`), 10 s per backend; \"relMSE at 10 s\" is the last doubling wave finished within 10 s."
+        echo "Each section quotes the lines its test prints (\`$out/tests.log\`): the property, the values and"
+        echo "standard errors on each backend, and the planted errors it rejects. The properties themselves"
+        echo "are stated in the headers of \`tests/stability_*.rs\`."
+        echo
+        echo "| scene | relMSE at 10 s, CPU | relMSE at 10 s, GPU |"
+        echo "| --- | --- | --- |"
+    } > "$out/summary.md.tmp"
+    : > "$out/sections.md.tmp"
+    report_list | while read -r name scene ref; do
+        echo "== $name"
+        mkdir -p "$out/$name"
+        for b in cpu gpu; do
+            "$hexray" render "$scene" --backend $b --width 128 --height 128 --spp 64 --seed 3 \
+                --out "$out/$name/$b.exr" --quiet
+            rm -f "$out/$name/$b.exr"
+        done
+        local cpu_at="-" gpu_at="-"
+        if [ "$ref" != "-" ]; then
+            "$hexray" curve "$scene" --backend cpu,gpu --reference "$refs/$ref" --time 10 \
+                --out "$out/$name" >/dev/null
+            rm -f "$out/$name"/*.svg
+            cpu_at=$(relmse_at "$out/$name/curve.csv" cpu 10)
+            gpu_at=$(relmse_at "$out/$name/curve.csv" gpu 10)
+        fi
+        echo "| $name | $cpu_at | $gpu_at |" >> "$out/summary.md.tmp"
+        {
+            echo "## $name"
+            echo
+            echo "\`$scene\`"
+            echo
+            echo "| CPU | GPU |"
+            echo "| --- | --- |"
+            echo "| ![cpu]($name/cpu.png) | ![gpu]($name/gpu.png) |"
+            echo
+            if [ "$ref" != "-" ]; then
+                echo "![relMSE against time]($name/relmse_vs_seconds.png)"
+                echo
+            fi
+        } >> "$out/sections.md.tmp"
+    done
+    # The tests' lines, grouped by module, after the pictures.
+    {
+        echo
+        echo "## What the tests measured"
+        echo
+        for module in stability_caustic stability_tiny_light stability_grazing stability_far_from_origin \
+            stability_mirror_corridor stability_thin stability_mirror stability_shadow_colour; do
+            echo "### \`tests/$module.rs\`"
+            echo
+            echo '```'
+            awk -v m="$module" '
+                /^test / { inmod = index($2, m "::") == 1; if (inmod) print; next }
+                inmod && !/^(running|stack backtrace|note:|thread)/ && NF > 0 { print }' "$out/tests.log"
+            echo '```'
+            echo
+        done
+    } >> "$out/sections.md.tmp"
+    cat "$out/summary.md.tmp" <(echo) "$out/sections.md.tmp" > docs/stability.md
+    rm -f "$out/summary.md.tmp" "$out/sections.md.tmp"
+    echo "wrote docs/stability.md"
+}
+
+case "${1:-}" in
+    references) references ;;
+    report) report ;;
+    *) echo "usage: docs/stability.sh references|report" >&2; exit 2 ;;
+esac
