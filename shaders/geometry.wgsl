@@ -91,23 +91,27 @@ fn intersect_triangle(ray: Ray, tri: Triangle) -> TriangleHit {
     if det == 0.0 {
         return miss;
     }
-    let inv_det = 1.0 / det;
+    // The barycentrics times |det| (the sign of det folded in) are compared with |det|, so a
+    // miss costs no division.
+    let sign = select(1.0, -1.0, det < 0.0);
+    let abs_det = abs(det);
     let s = ray.o - tri.v0;
-    let b1 = dot(s, pvec) * inv_det;
-    if !(b1 >= 0.0 && b1 <= 1.0) {
+    let u = dot(s, pvec) * sign;
+    if !(u >= 0.0 && u <= abs_det) {
         return miss;
     }
     let qvec = cross(s, e1);
-    let b2 = dot(ray.d, qvec) * inv_det;
-    if b2 < 0.0 || b1 + b2 > 1.0 {
+    let v = dot(ray.d, qvec) * sign;
+    if v < 0.0 || u + v > abs_det {
         return miss;
     }
-    let t = dot(e2, qvec) * inv_det;
-    let t_err = gamma(7.0) * dot(abs(e2), abs_cross(s, e1)) * abs(inv_det);
+    let inv_det = 1.0 / abs_det;
+    let t = dot(e2, qvec) * sign * inv_det;
+    let t_err = gamma(7.0) * dot(abs(e2), abs_cross(s, e1)) * inv_det;
     if !(t > t_err) {
         return miss;
     }
-    return TriangleHit(true, t, t_err, b1, b2);
+    return TriangleHit(true, t, t_err, u * inv_det, v * inv_det);
 }
 
 struct SphereHit {
@@ -171,8 +175,9 @@ fn triangle_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
     return PointWithError(p, p_err);
 }
 
+// The unit geometric normal, stored with the triangle (`Triangle::new`).
 fn triangle_normal(tri: Triangle) -> vec3<f32> {
-    return normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+    return tri.n;
 }
 
 // A sphere hit projected back onto the sphere; the bound is gamma(5)|p_local| plus the

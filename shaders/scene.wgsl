@@ -8,7 +8,9 @@ struct Triangle {
     v1: vec3<f32>,
     emitter: u32,
     v2: vec3<f32>,
-    pad: u32,
+    pad0: u32,
+    n: vec3<f32>,
+    pad1: u32,
 }
 
 struct Sphere {

@@ -466,12 +466,7 @@ mod tests {
     use super::*;
 
     fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
-        Triangle {
-            v0: a,
-            v1: b,
-            v2: c,
-            ..Default::default()
-        }
+        Triangle::new(a, b, c, 0)
     }
 
     /// `stack_size` bounds the traversal stack: checked against the largest stack the

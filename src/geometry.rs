@@ -10,7 +10,7 @@
 //! scales with the magnitude of the coordinates, which is what far-from-origin scenes need.
 
 use crate::flat::{BvhNode, Sphere, Triangle, EMPTY_SLOT};
-use glam::{Vec3, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 
 /// Half an ulp of 1.0 in f32: the relative rounding error of one operation.
 pub const MACHINE_EPSILON: f32 = f32::EPSILON * 0.5;
@@ -119,25 +119,34 @@ pub fn intersect_triangle(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
     if det == 0.0 {
         return None;
     }
-    let inv_det = 1.0 / det;
+    // The barycentrics times |det| (the sign of det folded in) are compared with |det|, so a
+    // miss costs no division.
+    let sign = 1.0f32.copysign(det);
+    let abs_det = det.abs();
     let s = ray.o - v0;
-    let b1 = s.dot(pvec) * inv_det;
-    if !(0.0..=1.0).contains(&b1) {
+    let u = s.dot(pvec) * sign;
+    if !(0.0..=abs_det).contains(&u) {
         return None;
     }
     let qvec = s.cross(e1);
-    let b2 = ray.d.dot(qvec) * inv_det;
-    if b2 < 0.0 || b1 + b2 > 1.0 {
+    let v = ray.d.dot(qvec) * sign;
+    if v < 0.0 || u + v > abs_det {
         return None;
     }
-    let t = e2.dot(qvec) * inv_det;
-    let t_err = gamma(7) * e2.abs().dot(abs_cross(s, e1)) * inv_det.abs();
+    let inv_det = 1.0 / abs_det;
+    let t = e2.dot(qvec) * sign * inv_det;
+    let t_err = gamma(7) * e2.abs().dot(abs_cross(s, e1)) * inv_det;
     // Written so that a NaN t (degenerate input) is rejected too.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(t > t_err) {
         return None;
     }
-    Some(TriangleHit { t, t_err, b1, b2 })
+    Some(TriangleHit {
+        t,
+        t_err,
+        b1: u * inv_det,
+        b2: v * inv_det,
+    })
 }
 
 /// A candidate sphere intersection: the nearest root above its error bound.
@@ -213,13 +222,10 @@ pub fn triangle_point(tri: &Triangle, b1: f32, b2: f32) -> (Vec3, Vec3) {
     (p, p_err)
 }
 
-/// Unit geometric normal of a triangle, (v1 - v0) x (v2 - v0) normalised.
+/// Unit geometric normal of a triangle, (v1 - v0) x (v2 - v0) normalised (stored with it).
 #[inline]
 pub fn triangle_normal(tri: &Triangle) -> Vec3 {
-    let v0 = Vec3::from(tri.v0);
-    (Vec3::from(tri.v1) - v0)
-        .cross(Vec3::from(tri.v2) - v0)
-        .normalize()
+    Vec3::from(tri.n)
 }
 
 /// The point of a sphere hit at `t`, projected back onto the sphere (which removes the error of
@@ -271,18 +277,10 @@ pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32
 /// test never computes 0 x inf.
 #[inline]
 pub fn safe_inverse(d: Vec3) -> Vec3 {
-    let nudge = |x: f32| {
-        if x.abs() < 1e-30 {
-            if x.is_sign_negative() {
-                -1e-30
-            } else {
-                1e-30
-            }
-        } else {
-            x
-        }
-    };
-    Vec3::new(1.0 / nudge(d.x), 1.0 / nudge(d.y), 1.0 / nudge(d.z))
+    let d = Vec3A::from(d);
+    let tiny = d.abs().cmplt(Vec3A::splat(1e-30));
+    let nudged = Vec3A::select(tiny, Vec3A::splat(1e-30).copysign(d), d);
+    Vec3::from(Vec3A::ONE / nudged)
 }
 
 #[cfg(test)]

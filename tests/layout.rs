@@ -43,7 +43,9 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             v1,
             emitter,
             v2,
-            pad
+            pad0,
+            n,
+            pad1
         }),
         rust_layout!(Sphere {
             center,

@@ -73,12 +73,12 @@ fn triangle_self_hits(spawn: Spawn) -> usize {
         let s = Sampler::new(77, i, 0);
         let (a, b, c) = (s.draw4(0), s.draw4(1), s.draw4(2));
         let (d, e) = (s.draw4(3), s.draw4(4));
-        let tri = Triangle {
-            v0: [coord(a[0], a[1]), coord(a[2], a[3]), coord(b[0], b[1])],
-            v1: [coord(b[2], b[3]), coord(c[0], c[1]), coord(c[2], c[3])],
-            v2: [coord(d[0], d[1]), coord(d[2], d[3]), coord(e[0], e[1])],
-            ..Default::default()
-        };
+        let tri = Triangle::new(
+            [coord(a[0], a[1]), coord(a[2], a[3]), coord(b[0], b[1])],
+            [coord(b[2], b[3]), coord(c[0], c[1]), coord(c[2], c[3])],
+            [coord(d[0], d[1]), coord(d[2], d[3]), coord(e[0], e[1])],
+            0,
+        );
         let n = triangle_normal(&tri);
         if !n.is_finite() {
             continue;
