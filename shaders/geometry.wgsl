@@ -202,7 +202,7 @@ fn intersect_aabb4(node: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) ->
     let hi_z = (node.max_z - o.z) * inv_d.z;
     let t_near = max(max(max(min(lo_x, hi_x), min(lo_y, hi_y)), min(lo_z, hi_z)), vec4<f32>(0.0));
     let t_far = min(min(max(lo_x, hi_x), max(lo_y, hi_y)), max(lo_z, hi_z)) * (1.0 + 2.0 * gamma(3.0));
-    let hit = t_near <= min(t_far, vec4<f32>(t_max)) & node.count != vec4<u32>(EMPTY_SLOT);
+    let hit = (t_near <= min(t_far, vec4<f32>(t_max))) & (node.count != vec4<u32>(EMPTY_SLOT));
     return select(vec4<f32>(-1.0), t_near, hit);
 }
 

@@ -110,46 +110,30 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
         });
     }
     let n = info.len();
-    let root = build_node(&mut info, 0, n, 0);
-    // The root must be an interior node; a scene of one primitive gets a root whose two
-    // children are the same leaf.
-    let root = match root {
-        leaf @ Built::Leaf { .. } => {
-            let (bounds, offset, count) = match &leaf {
-                Built::Leaf {
-                    bounds,
-                    offset,
-                    count,
-                } => (*bounds, *offset, *count),
-                Built::Interior { .. } => unreachable!(),
-            };
-            let twin = Built::Leaf {
-                bounds,
-                offset,
-                count,
-            };
-            Built::Interior {
-                bounds,
-                children: Box::new([leaf, twin]),
-            }
-        }
-        interior => interior,
-    };
     let mut nodes = Vec::with_capacity(n);
-    flatten(&root, &mut nodes);
+    if n == 0 {
+        // Nothing to hit: a root whose four slots are empty.
+        nodes.push(BvhNode {
+            count: [EMPTY_SLOT; 4],
+            ..Default::default()
+        });
+        return (nodes, Vec::new());
+    }
+    flatten(&build_node(&mut info, 0, n, 0), &mut nodes);
     let prims = info.iter().map(|p| p.id).collect();
     (nodes, prims)
 }
 
-/// Appends the interior node `built` and its interior descendants in depth-first order as
-/// four-wide nodes; returns its index. The binary node's two children become up to four by
-/// repeatedly opening the interior child of largest surface area (the collapse of Wald et al.,
-/// "Getting Rid of Packets", 2008), which keeps the SAH tree's structure and halves the levels.
+/// Appends the node `built` and its interior descendants in depth-first order as four-wide nodes;
+/// returns its index. The binary node's two children become up to four by repeatedly opening the
+/// interior child of largest surface area (the collapse of Wald et al., "Getting Rid of Packets",
+/// 2008), which keeps the SAH tree's structure and halves the levels. A root that is a leaf (a
+/// scene of up to `MAX_LEAF` primitives the SAH does not split) becomes a node of one slot.
 fn flatten(built: &Built, nodes: &mut Vec<BvhNode>) -> u32 {
-    let Built::Interior { children, .. } = built else {
-        unreachable!("leaves live in their parent's node");
+    let mut kids: Vec<&Built> = match built {
+        Built::Interior { children, .. } => children.iter().collect(),
+        Built::Leaf { .. } => vec![built],
     };
-    let mut kids: Vec<&Built> = children.iter().collect();
     while kids.len() < 4 {
         let widest = kids
             .iter()
@@ -175,6 +159,7 @@ fn flatten(built: &Built, nodes: &mut Vec<BvhNode>) -> u32 {
         (node.max_x[c], node.max_y[c], node.max_z[c]) = (b.max.x, b.max.y, b.max.z);
         match kid {
             Built::Leaf { offset, count, .. } => {
+                debug_assert!(*count > 0, "an empty leaf would read as an interior node");
                 node.child[c] = *offset;
                 node.count[c] = *count;
             }
@@ -352,8 +337,9 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
 /// anything is pushed; then the nearest hit interior child is visited next and the others are
 /// pushed with their entry distances: a missed child is never pushed and a pushed one that a
 /// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
-/// distance: sorting all four costs more than the culling it buys. `on_hit(prim, t, t_err, b1,
-/// b2, &mut t_limit)` decides what a hit means; it returns true to stop at once (any-hit).
+/// distance: sorting all four was measured slower (the keys' lanes travel through memory) for
+/// the little culling it adds (docs/performance.md). `on_hit(prim, t, t_err, b1, b2,
+/// &mut t_limit)` decides what a hit means; it returns true to stop at once (any-hit).
 #[inline]
 fn traverse(
     scene: &FlatScene,
@@ -545,7 +531,36 @@ mod tests {
         assert!(seen.iter().all(|&k| k == 1));
     }
 
-    /// The BVH must find exactly what testing every primitive finds.
+    /// Brute force over every primitive: the nearest hit's t, and whether anything blocks the
+    /// segment (0, t_max) the way `occluded` decides it (a hit within its error bound of t_max
+    /// does not count).
+    fn brute_force(tris: &[Triangle], spheres: &[Sphere], ray: &Ray, t_max: f32) -> (f32, bool) {
+        let mut hits: Vec<(f32, f32)> = tris
+            .iter()
+            .filter_map(|t| intersect_triangle(ray, t).map(|h| (h.t, h.t_err)))
+            .collect();
+        hits.extend(
+            spheres
+                .iter()
+                .filter_map(|s| intersect_sphere(ray, s).map(|h| (h.t, h.t_err))),
+        );
+        let nearest = hits.iter().map(|h| h.0).fold(f32::INFINITY, f32::min);
+        (nearest, hits.iter().any(|&(t, e)| t < t_max - e))
+    }
+
+    fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
+        let (nodes, prims) = build(&tris, &spheres);
+        FlatScene {
+            triangles: tris,
+            spheres,
+            nodes,
+            prims,
+            ..Default::default()
+        }
+    }
+
+    /// The BVH must find exactly what testing every primitive finds: the nearest hit, and for
+    /// shadow segments of every length whether anything blocks them.
     #[test]
     fn bvh_agrees_with_brute_force() {
         use crate::sampling::pcg4d;
@@ -561,34 +576,65 @@ mod tests {
             radius: 1.0,
             ..Default::default()
         }];
-        let (nodes, prims) = build(&tris, &spheres);
-        let scene = FlatScene {
-            triangles: tris.clone(),
-            spheres: spheres.clone(),
-            nodes,
-            prims,
-            ..Default::default()
-        };
+        let scene = scene_of(tris.clone(), spheres.clone());
         for i in 0..2000u32 {
             let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 10.0;
-            let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+            let mut d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+            // Every fourth ray along an axis (two direction components exactly 0).
+            if i % 4 == 0 {
+                let axis = (i / 4 % 3) as usize;
+                let mut a = Vec3::ZERO;
+                a[axis] = if d[axis] < 0.0 { -1.0 } else { 1.0 };
+                d = a;
+            }
             let ray = Ray { o, d };
-            let mut brute = f32::INFINITY;
-            for t in &tris {
-                if let Some(h) = intersect_triangle(&ray, t) {
-                    brute = brute.min(h.t);
-                }
-            }
-            if let Some(h) = intersect_sphere(&ray, &spheres[0]) {
-                brute = brute.min(h.t);
-            }
             let got = intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
-            assert_eq!(got, brute, "ray {i}");
             assert_eq!(
-                occluded(&scene, &ray, f32::INFINITY),
-                brute.is_finite(),
+                got,
+                brute_force(&tris, &spheres, &ray, f32::INFINITY).0,
                 "ray {i}"
             );
+            // Shadow segments ending before, at and after the nearest hit.
+            for t_max in [0.5 * got, got, 2.0 * got, 1.0, 3.0] {
+                if !t_max.is_finite() {
+                    continue;
+                }
+                assert_eq!(
+                    occluded(&scene, &ray, t_max),
+                    brute_force(&tris, &spheres, &ray, t_max).1,
+                    "ray {i}, t_max {t_max}"
+                );
+            }
+        }
+    }
+
+    /// Scenes of one to four primitives (whose root the SAH may leave a leaf) and an empty one.
+    #[test]
+    fn small_scenes_agree_with_brute_force() {
+        use crate::sampling::pcg4d;
+        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 7, 8])[0]);
+        for n in 0..=4u32 {
+            let tris: Vec<Triangle> = (0..n)
+                .map(|i| {
+                    let v = |k| (Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2)) * 2.0).into();
+                    tri(v(0), v(3), v(6))
+                })
+                .collect();
+            let scene = scene_of(tris.clone(), vec![]);
+            for i in 0..500u32 {
+                let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 2.0 - 0.5;
+                let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+                let ray = Ray { o, d };
+                let (nearest, _) = brute_force(&tris, &[], &ray, f32::INFINITY);
+                let got =
+                    intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+                assert_eq!(got, nearest, "{n} triangles, ray {i}");
+                assert_eq!(
+                    occluded(&scene, &ray, 1.0),
+                    brute_force(&tris, &[], &ray, 1.0).1,
+                    "{n} triangles, ray {i}"
+                );
+            }
         }
     }
 }

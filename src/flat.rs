@@ -99,7 +99,7 @@ pub struct Emitter {
     pub pmf: f32,
 }
 
-/// A BVH node with up to four children (a "BVH4", as Embree and pbrt-v4's wide variants build),
+/// A BVH node with up to four children (a "BVH4", as Embree builds),
 /// in depth-first order from the root (node 0). The children's boxes are stored as a structure
 /// of arrays, one row per plane, so that one four-wide operation per plane tests all four
 /// children (on the CPU in SSE/NEON lanes, in WGSL as `vec4<f32>`) and one node fetch serves all

@@ -74,6 +74,18 @@ fn cases() -> Vec<Case> {
             on_line: Some("\"v\""),
         },
         Case {
+            name: "triangle that collapses in f32 far from the origin",
+            base: ROOM,
+            // Area 0.2 in f64, but 1e7 + 0.4 rounds to 1e7 in f32 (ulp 1): two vertices merge.
+            edit: |s| {
+                s["triangles"][5]["v"] =
+                    json!([[1e7, 0.0, 0.0], [1.00000004e7, 0.0, 0.0], [1e7, 1.0, 0.0]])
+            },
+            path: "triangles[5].v",
+            message: "zero area at f32 precision",
+            on_line: Some("\"v\""),
+        },
+        Case {
             name: "zero radius",
             base: ROOM,
             edit: |s| s["spheres"][0]["radius"] = json!(0.0),

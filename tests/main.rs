@@ -33,3 +33,4 @@ mod stability_shadow_colour;
 mod stability_thin;
 mod stability_tiny_light;
 mod standard_error;
+mod tessellation;

@@ -202,14 +202,18 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
             check_vec(v, &p.key("v").index(k))?;
         }
         check_material_ref(&t.material, &p.key("material"), desc, true)?;
-        let (e1, e2) = (sub(t.v[1], t.v[0]), sub(t.v[2], t.v[0]));
+        // The renderer sees the vertices rounded to f32: a triangle far from the origin can
+        // collapse there although its f64 vertices are distinct.
+        let v = t.v.map(|p| p.map(|x| x as f32 as f64));
+        let (e1, e2) = (sub(v[1], v[0]), sub(v[2], v[0]));
         // Degenerate when the sine of the angle between the edges is below f32 resolution: the
         // normal would then be noise (or zero, for repeated or collinear vertices).
         if norm(cross(e1, e2)) <= 4.0 * f32::EPSILON as f64 * norm(e1) * norm(e2) {
             return Err(issue(
                 p.key("v"),
-                "the triangle has zero area (repeated or collinear vertices)",
-                "remove it or correct a vertex",
+                "the triangle has zero area at f32 precision (repeated or collinear vertices, \
+                 or too small for its distance from the origin)",
+                "remove it, correct a vertex, or move the scene nearer the origin",
             ));
         }
     }
@@ -235,16 +239,19 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         let p = bp.index(i);
         check_vec(&b.min, &p.key("min"))?;
         check_vec(&b.max, &p.key("max"))?;
-        if let Some(a) = (0..3).find(|&a| b.min[a] >= b.max[a]) {
+        // Compared as the renderer sees them, rounded to f32: a thin box far from the origin
+        // can flatten there.
+        if let Some(a) = (0..3).find(|&a| b.min[a] as f32 >= b.max[a] as f32) {
             return Err(issue(
                 p.key("max").index(a),
                 format!(
-                    "max {} is not greater than min {} on axis {}",
+                    "max {} is not greater than min {} on axis {} (at f32 precision)",
                     b.max[a],
                     b.min[a],
                     ["x", "y", "z"][a]
                 ),
-                "a box needs min < max on every axis",
+                "a box needs min < max on every axis; a thin box far from the origin needs more \
+                 thickness or a position nearer the origin",
             ));
         }
         check_material_ref(&b.material, &p.key("material"), desc, true)?;
