@@ -86,6 +86,7 @@ fn sample_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec4<f32>) -> BsdfSa
     let nf = select(n, -n, dot(wo, n) < 0.0);
     let local = sample_cosine_hemisphere(u.x, u.y);
     let basis = orthonormal_basis(nf);
-    let wi = normalize(local.x * basis.t + local.y * basis.b + local.z * nf);
+    // Unit to rounding: an orthonormal basis times a unit vector.
+    let wi = local.x * basis.t + local.y * basis.b + local.z * nf;
     return BsdfSample(wi, m.color, local.z * FRAC_1_PI, 1.0);
 }

@@ -52,8 +52,33 @@ const FRAC_1_PI: f32 = 0.318309886183790671538;
 // Cosine-weighted direction about +z (Malley's method); pdf = cos(theta) / pi.
 fn sample_cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
     let r = sqrt(u1);
-    let phi = 2.0 * PI * u2;
-    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
+    let sc = sin_cos_turns(u2);
+    return vec3<f32>(r * sc.y, r * sc.x, sqrt(max(1.0 - u1, 0.0)));
+}
+
+// (sin 2πu, cos 2πu) for u in [0, 1): the nearest quarter turn exactly, the remainder in
+// [-π/4, π/4] through Cephes' sinf/cosf minimax polynomials, the quarter turn swapping and
+// negating them (`sin_cos_turns` in src/sampling.rs).
+fn sin_cos_turns(u: f32) -> vec2<f32> {
+    let q = floor(u * 4.0 + 0.5);
+    let x = (u * 4.0 - q) * (0.5 * PI);
+    let x2 = x * x;
+    let s = x + x * x2 * (-1.6666655e-1 + x2 * (8.332161e-3 + x2 * -1.9515296e-4));
+    let c = 1.0 - 0.5 * x2 + x2 * x2 * (4.1666646e-2 + x2 * (-1.3887316e-3 + x2 * 2.4433157e-5));
+    switch u32(q) & 3u {
+        case 0u: {
+            return vec2<f32>(s, c);
+        }
+        case 1u: {
+            return vec2<f32>(c, -s);
+        }
+        case 2u: {
+            return vec2<f32>(-s, -c);
+        }
+        default: {
+            return vec2<f32>(-c, s);
+        }
+    }
 }
 
 // Uniform point on a triangle as barycentrics (b0, b1, b2); pdf = 1 / area.

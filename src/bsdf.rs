@@ -117,7 +117,8 @@ pub fn sample_bsdf(m: &Material, n: Vec3, wo: Vec3, u: [f32; 4]) -> BsdfSample {
             let nf = if wo.dot(n) < 0.0 { -n } else { n };
             let local = sample_cosine_hemisphere(u[0], u[1]);
             let (t, b) = orthonormal_basis(nf);
-            let wi = (local.x * t + local.y * b + local.z * nf).normalize();
+            // Unit to rounding: an orthonormal basis times a unit vector.
+            let wi = local.x * t + local.y * b + local.z * nf;
             BsdfSample {
                 wi,
                 weight: color,
