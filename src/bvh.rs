@@ -357,9 +357,9 @@ fn traverse(
         let t_enter = intersect_aabb4(node, ray.o, inv_d, t_limit);
         // Bit c set: the ray enters child c's box (a leaf's in `leaves`, a node's in `inner`).
         let (mut leaves, mut inner) = (0u32, 0u32);
-        for c in 0..4 {
-            let hit = u32::from(t_enter[c] >= 0.0) << c;
-            if node.count[c] == 0 {
+        for (c, (&t, &count)) in t_enter.iter().zip(&node.count).enumerate() {
+            let hit = u32::from(t >= 0.0) << c;
+            if count == 0 {
                 inner |= hit;
             } else {
                 leaves |= hit;
