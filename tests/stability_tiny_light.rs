@@ -97,11 +97,17 @@ const REFERENCE_1E4: &str = "tests/data/references/stability/tiny_light_1e4_32.e
 fn light_10000_times_smaller_renders_finite_on_both_backends() {
     let cpu = render_cpu(SCENE_1E4, 16, 16, 256, 43, Faults::NONE);
     assert_eq!(cpu.dropped(), 0, "CPU: non-finite samples");
-    assert!(cpu.pixels.iter().all(|p| p.mean().iter().all(|&m| m >= 0.0)));
+    assert!(cpu
+        .pixels
+        .iter()
+        .all(|p| p.mean().iter().all(|&m| m >= 0.0)));
     let Some(gpu) = gpu() else { return };
     let film = render_gpu(gpu, SCENE_1E4, 16, 16, 256, 44, Faults::NONE);
     assert_eq!(film.dropped(), 0, "GPU: non-finite samples");
-    assert!(film.pixels.iter().all(|p| p.mean().iter().all(|&m| m >= 0.0)));
+    assert!(film
+        .pixels
+        .iter()
+        .all(|p| p.mean().iter().all(|&m| m >= 0.0)));
 }
 
 /// The light shrunk 10^4-fold is unbiased: a render as long as the reference (32x32, 262144
@@ -112,6 +118,10 @@ fn light_10000_times_smaller_renders_finite_on_both_backends() {
 fn light_10000_times_smaller_is_unbiased_on_the_cpu() {
     let film = render_cpu(SCENE_1E4, 32, 32, 262_144, 45, Faults::NONE);
     assert_eq!(film.dropped(), 0, "non-finite samples");
-    let z = mean_z("tiny light 1e4, CPU", &MeanImage::from_film(&film), &read(REFERENCE_1E4));
+    let z = mean_z(
+        "tiny light 1e4, CPU",
+        &MeanImage::from_film(&film),
+        &read(REFERENCE_1E4),
+    );
     assert!(agrees(z), "z {z:?}");
 }
