@@ -11,7 +11,7 @@
 //! above the bottom face (a 1e-4 slit) shows the lit floor through the slit (about 160 lit
 //! pixels on either backend).
 //!
-//! Known leak (a finding, not hidden): at 4096 spp (16.8 M samples per view, seed 900) the CPU
+//! Known leak (a finding, not hidden): at 4096 spp (16.8 M samples per view, seed 54) the CPU
 //! backend lit 8 pixels of the corner view and 5 of the edge view (13 samples in 33.6 M, 0.39
 //! per million; with the division-free Möller–Trumbore of 2026-11-23, which rounds the v1–v2 edge
 //! test differently; the earlier code leaked 4 + 4, 0.24 per million), each a single sample of
@@ -29,7 +29,7 @@
 //! its error bound the second. At 64 spp the expected number of such leaks in this test is
 //! about 0.2, so it passes with probability about 0.8 whatever the seed; it has power against
 //! leaks of 10 or more per million (P(miss) < 1 %), and
-//! `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails today; 40 s)
+//! `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails today; 30 s)
 //! states the property at the rate where it fails. (The issue's own statistic, the region's
 //! mean within 4 s.e. of 0, holds even there: 13 leaking samples give z ≤ √13 ≈ 3.6.)
 //!
@@ -120,8 +120,8 @@ fn thin_closed_box_is_black_inside_on_the_gpu() {
 /// The same property at 4096 spp (16.8 M samples per view), where the leaks described in the
 /// header appear: run with `--ignored` after changing the intersection or the ray spawning.
 #[test]
-#[ignore = "fails: about 4 of 16.8 M samples leak per view (shared-edge cracks and edge hits in \
-            src/geometry.rs, see the file header); 100 s"]
+#[ignore = "fails: 13 of 33.6 M samples leak, 8 + 5 pixels in the two views (shared-edge cracks \
+            and edge hits in src/geometry.rs, see the file header); 30 s"]
 fn thin_closed_box_is_black_inside_at_16_million_samples() {
     let views = box_views(BOX, &|s| {
         render_cpu_scene(s, SIZE, SIZE, 4096, 54, Faults::NONE)
