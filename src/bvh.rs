@@ -455,19 +455,35 @@ mod tests {
         Triangle::new(a, b, c, 0)
     }
 
+    /// A uniform number in [0, 1) for test data: number `k` of item `i` of stream `stream`.
+    fn rnd(stream: u32, i: u32, k: u32) -> f32 {
+        crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, k, stream, stream + 1])[0])
+    }
+
+    /// `n` triangles of stream `stream`, each within a unit cube (moved by `shift`) of a centre
+    /// uniform in [0, spread)³.
+    fn triangle_soup(n: u32, stream: u32, spread: f32, shift: f32) -> Vec<Triangle> {
+        (0..n)
+            .map(|i| {
+                let c = Vec3::new(rnd(stream, i, 0), rnd(stream, i, 1), rnd(stream, i, 2)) * spread;
+                let v = |k| {
+                    (c + Vec3::new(
+                        rnd(stream, i, k),
+                        rnd(stream, i, k + 1),
+                        rnd(stream, i, k + 2),
+                    ) + shift)
+                        .into()
+                };
+                tri(v(3), v(6), v(9))
+            })
+            .collect()
+    }
+
     /// `stack_size` bounds the traversal stack: checked against the largest stack the
     /// traversal's pushes reach over every node of a tree of 500 triangles.
     #[test]
     fn stack_size_bounds_the_traversal_stack() {
-        use crate::sampling::pcg4d;
-        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 3, 4])[0]);
-        let tris: Vec<Triangle> = (0..500u32)
-            .map(|i| {
-                let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 20.0;
-                let v = |k| (c + Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2))).into();
-                tri(v(3), v(6), v(9))
-            })
-            .collect();
+        let tris = triangle_soup(500, 3, 20.0, 0.0);
         let (nodes, _) = build(&tris, &[]);
         let bound = stack_size(&nodes);
         // Replay the traversal's pushes with every box hit (the worst case): each node pushes
@@ -501,15 +517,7 @@ mod tests {
     /// Every primitive is in exactly one leaf, and every child box contains its primitives.
     #[test]
     fn leaves_partition_the_primitives_inside_their_boxes() {
-        use crate::sampling::pcg4d;
-        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 5, 6])[0]);
-        let tris: Vec<Triangle> = (0..300u32)
-            .map(|i| {
-                let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 10.0;
-                let v = |k| (c + Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2))).into();
-                tri(v(3), v(6), v(9))
-            })
-            .collect();
+        let tris = triangle_soup(300, 5, 10.0, 0.0);
         let (nodes, prims) = build(&tris, &[]);
         let mut seen = vec![0; tris.len()];
         for n in &nodes {
@@ -563,14 +571,8 @@ mod tests {
     /// shadow segments of every length whether anything blocks them.
     #[test]
     fn bvh_agrees_with_brute_force() {
-        use crate::sampling::pcg4d;
-        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 1, 2])[0]);
-        let mut tris = Vec::new();
-        for i in 0..300u32 {
-            let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 10.0;
-            let v = |k| c + Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2)) - 0.5;
-            tris.push(tri(v(3).into(), v(6).into(), v(9).into()));
-        }
+        let rnd = |i, k| rnd(1, i, k);
+        let tris = triangle_soup(300, 1, 10.0, -0.5);
         let spheres = vec![Sphere {
             center: [5.0, 5.0, 5.0],
             radius: 1.0,
@@ -611,8 +613,7 @@ mod tests {
     /// Scenes of one to four primitives (whose root the SAH may leave a leaf) and an empty one.
     #[test]
     fn small_scenes_agree_with_brute_force() {
-        use crate::sampling::pcg4d;
-        let rnd = |i: u32, k: u32| crate::sampling::u32_to_unit_f32(pcg4d([i, k, 7, 8])[0]);
+        let rnd = |i, k| rnd(7, i, k);
         for n in 0..=4u32 {
             let tris: Vec<Triangle> = (0..n)
                 .map(|i| {

@@ -341,8 +341,7 @@ fn mirror_corridor_unfolding_matches_tracing_in_f64() {
 #[test]
 fn mirror_corridor_matches_the_series_on_the_cpu() {
     let r = cpu(Faults::NONE);
-    eprintln!("CPU mirror corridor: {}", r.summary());
-    assert!(r.agrees(), "CPU mirror corridor: {}", r.summary());
+    r.assert_agrees("CPU mirror corridor");
 }
 
 #[test]
@@ -350,32 +349,21 @@ fn mirror_corridor_matches_the_series_on_the_gpu() {
     let Some(r) = gpu_report(Faults::NONE) else {
         return;
     };
-    eprintln!("GPU mirror corridor: {}", r.summary());
-    assert!(r.agrees(), "GPU mirror corridor: {}", r.summary());
+    r.assert_agrees("GPU mirror corridor");
 }
 
 /// Power: a maximum depth of 8 bounces loses every crossing from the 9th on.
 #[test]
 fn mirror_corridor_rejects_a_depth_cap_on_the_cpu() {
     let r = cpu(DEPTH_CAP);
-    eprintln!("CPU mirror corridor, depth cap 8: {}", r.summary());
-    assert!(
-        !r.agrees() && r.z.iter().all(|z| *z < -4.0),
-        "a depth cap went unnoticed: {}",
-        r.summary()
-    );
+    r.assert_rejected_as_too_dark("CPU mirror corridor, depth cap 8");
 }
 
 /// ... and mirrors that reflect 97 % (0.97^k at crossing k).
 #[test]
 fn mirror_corridor_rejects_a_dim_mirror_on_the_cpu() {
     let r = cpu(DIM_MIRROR);
-    eprintln!("CPU mirror corridor, mirror 0.97: {}", r.summary());
-    assert!(
-        !r.agrees() && r.z.iter().all(|z| *z < -4.0),
-        "a dim mirror went unnoticed: {}",
-        r.summary()
-    );
+    r.assert_rejected_as_too_dark("CPU mirror corridor, mirror 0.97");
 }
 
 #[test]
@@ -383,12 +371,7 @@ fn mirror_corridor_rejects_a_depth_cap_on_the_gpu() {
     let Some(r) = gpu_report(DEPTH_CAP) else {
         return;
     };
-    eprintln!("GPU mirror corridor, depth cap 8: {}", r.summary());
-    assert!(
-        !r.agrees() && r.z.iter().all(|z| *z < -4.0),
-        "a depth cap went unnoticed: {}",
-        r.summary()
-    );
+    r.assert_rejected_as_too_dark("GPU mirror corridor, depth cap 8");
 }
 
 #[test]
@@ -396,10 +379,5 @@ fn mirror_corridor_rejects_a_dim_mirror_on_the_gpu() {
     let Some(r) = gpu_report(DIM_MIRROR) else {
         return;
     };
-    eprintln!("GPU mirror corridor, mirror 0.97: {}", r.summary());
-    assert!(
-        !r.agrees() && r.z.iter().all(|z| *z < -4.0),
-        "a dim mirror went unnoticed: {}",
-        r.summary()
-    );
+    r.assert_rejected_as_too_dark("GPU mirror corridor, mirror 0.97");
 }

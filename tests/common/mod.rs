@@ -40,10 +40,35 @@ pub fn render_cpu_light_samples(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
+    render_cpu_flat(
+        &scene,
+        &flat,
+        width,
+        height,
+        spp,
+        seed,
+        light_samples,
+        faults,
+    )
+}
+
+/// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
+/// the loaded scene's camera.
+#[allow(clippy::too_many_arguments)]
+fn render_cpu_flat(
+    scene: &Scene,
+    flat: &FlatScene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    light_samples: u32,
+    faults: Faults,
+) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     render_pass(
-        &flat,
+        flat,
         &camera,
         seed,
         0,
@@ -126,16 +151,42 @@ pub fn render_gpu_light_samples(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
+    render_gpu_flat(
+        gpu,
+        &scene,
+        &flat,
+        width,
+        height,
+        spp,
+        seed,
+        light_samples,
+        faults,
+    )
+}
+
+/// The one GPU render every helper here ends in, with the kernel and residency the CLI uses.
+#[allow(clippy::too_many_arguments)]
+fn render_gpu_flat(
+    gpu: &hexray::gpu::Gpu,
+    scene: &Scene,
+    flat: &FlatScene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    light_samples: u32,
+    faults: Faults,
+) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut r = hexray::gpu::GpuRenderer::new(
         &gpu.device,
         &gpu.queue,
-        &flat,
+        flat,
         camera,
         seed,
         faults,
         hexray::gpu::Checks::Unchecked,
-        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), flat),
     )
     .unwrap();
     r.set_light_samples(light_samples);
@@ -165,11 +216,16 @@ pub fn render_cpu_scene(
     seed: u32,
     faults: Faults,
 ) -> Film {
-    let flat = FlatScene::build(scene);
-    let camera = Camera::new(&scene.desc.camera, width, height);
-    let mut film = Film::new(width, height);
-    render_pass(&flat, &camera, seed, 0, spp, 1, faults, &mut film);
-    film
+    render_cpu_flat(
+        scene,
+        &FlatScene::build(scene),
+        width,
+        height,
+        spp,
+        seed,
+        1,
+        faults,
+    )
 }
 
 /// [`render_gpu`] of a loaded (possibly changed) scene.
@@ -183,21 +239,7 @@ pub fn render_gpu_scene(
     faults: Faults,
 ) -> Film {
     let flat = FlatScene::build(scene);
-    let camera = Camera::new(&scene.desc.camera, width, height);
-    let mut r = hexray::gpu::GpuRenderer::new(
-        &gpu.device,
-        &gpu.queue,
-        &flat,
-        camera,
-        seed,
-        faults,
-        hexray::gpu::Checks::Unchecked,
-        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
-    )
-    .unwrap();
-    let mut film = Film::new(width, height);
-    r.render(0, spp, &mut film).unwrap();
-    film
+    render_gpu_flat(gpu, scene, &flat, width, height, spp, seed, 1, faults)
 }
 
 /// Pixels (x, y) with any non-zero sample: radiance is never negative, so a pixel whose sum is 0
@@ -239,6 +281,23 @@ impl TruthReport {
             && self.z.iter().all(|z| z.abs() <= 4.0)
             && self.light_where_black == 0
             && self.dropped == 0
+    }
+
+    /// Prints the report and asserts that the image agrees with the exact one.
+    pub fn assert_agrees(&self, what: &str) {
+        eprintln!("{what}: {}", self.summary());
+        assert!(self.agrees(), "{what}: {}", self.summary());
+    }
+
+    /// Prints the report and asserts that a planted error that darkens the image was caught:
+    /// the image disagrees, with every channel's mean more than 4 s.e. below the exact one.
+    pub fn assert_rejected_as_too_dark(&self, what: &str) {
+        eprintln!("{what}: {}", self.summary());
+        assert!(
+            !self.agrees() && self.z.iter().all(|z| *z < -4.0),
+            "{what} went unnoticed: {}",
+            self.summary()
+        );
     }
 
     pub fn summary(&self) -> String {
