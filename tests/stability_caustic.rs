@@ -13,28 +13,19 @@
 //! renderer; the image pools 4 million samples and thousands of caustic paths. Power: glass that
 //! passes 10 % less light (`specular_scale` 0.9, the caustic 19 % darker) is rejected.
 
-use crate::common::reference::{mean_z, read};
+use crate::common::reference::{film_mean_z, means_agree};
 use crate::common::*;
 use hexray::cpu::Faults;
-use hexray::stats::MeanImage;
 
 const SCENE: &str = "scenes/stability/caustic.json";
 const REFERENCE: &str = "tests/data/references/stability/caustic_32.exr";
-
-fn agrees(z: [f64; 3]) -> bool {
-    z.iter().all(|z| z.abs() <= 4.0)
-}
 
 #[test]
 fn caustic_is_unbiased_on_the_cpu() {
     let film = render_cpu(SCENE, 32, 32, 4096, 31, Faults::NONE);
     assert_eq!(film.dropped(), 0, "non-finite samples");
-    let z = mean_z(
-        "caustic, CPU",
-        &MeanImage::from_film(&film),
-        &read(REFERENCE),
-    );
-    assert!(agrees(z), "z {z:?}");
+    let z = film_mean_z("caustic, CPU", &film, REFERENCE);
+    assert!(means_agree(z), "z {z:?}");
 }
 
 /// The GPU renders 16x16 pixels (lavapipe is slow): the same image mean, from 1 million samples.
@@ -43,12 +34,8 @@ fn caustic_is_unbiased_on_the_gpu() {
     let Some(gpu) = gpu() else { return };
     let film = render_gpu(gpu, SCENE, 16, 16, 4096, 32, Faults::NONE);
     assert_eq!(film.dropped(), 0, "non-finite samples");
-    let z = mean_z(
-        "caustic, GPU",
-        &MeanImage::from_film(&film),
-        &read(REFERENCE),
-    );
-    assert!(agrees(z), "z {z:?}");
+    let z = film_mean_z("caustic, GPU", &film, REFERENCE);
+    assert!(means_agree(z), "z {z:?}");
 }
 
 #[test]
@@ -58,10 +45,6 @@ fn caustic_test_rejects_glass_that_passes_10_percent_less() {
         ..Faults::NONE
     };
     let film = render_cpu(SCENE, 32, 32, 4096, 31, dim);
-    let z = mean_z(
-        "caustic, CPU, dim glass",
-        &MeanImage::from_film(&film),
-        &read(REFERENCE),
-    );
-    assert!(!agrees(z), "dim glass passed: z {z:?}");
+    let z = film_mean_z("caustic, CPU, dim glass", &film, REFERENCE);
+    assert!(!means_agree(z), "dim glass passed: z {z:?}");
 }

@@ -2,6 +2,7 @@
 //! `docs/stability.sh references`), and the statistic that compares a render against one.
 
 use super::repo;
+use hexray::film::Film;
 use hexray::output::read_exr;
 use hexray::stats::{welch_blocks, MeanImage};
 
@@ -23,6 +24,18 @@ pub fn read(rel: &str) -> MeanImage {
         var: var.pixels.iter().map(|p| p.map(f64::from)).collect(),
         n: spp,
     }
+}
+
+/// [`mean_z`] of a rendered film against the reference file `reference`.
+pub fn film_mean_z(what: &str, film: &Film, reference: &str) -> [f64; 3] {
+    mean_z(what, &MeanImage::from_film(film), &read(reference))
+}
+
+/// Every channel's image mean within 4 combined standard errors of the reference's: for a
+/// correct renderer |z| > 4 has probability 6e-5 per channel (the image mean of thousands of
+/// independent pixel estimates is normal to a good approximation).
+pub fn means_agree(z: [f64; 3]) -> bool {
+    z.iter().all(|z| z.abs() <= 4.0)
 }
 
 /// How a render's image mean compares with a reference's, per channel: the difference over the
