@@ -60,6 +60,9 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
             if t_enter[c] > best.t {
                 continue;
             }
+            // The CPU tests a leaf's triangles four at a time in SIMD lanes (`TrianglePack`,
+            // the same arithmetic per lane), then its spheres; here one entry per iteration, in
+            // the same order (a leaf's triangles come before its spheres in `prims`).
             for (var k = node.child[c]; k < node.child[c] + node.count[c]; k++) {
                 let prim = prim_ref(k);
                 var t = 0.0;

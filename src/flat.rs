@@ -7,6 +7,7 @@
 //! may fill its fourth lane, so each struct is a whole number of vec4s.
 
 use crate::bvh;
+use crate::geometry::TrianglePack;
 use crate::scene::{MaterialDesc, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -23,6 +24,10 @@ pub const NOT_AN_EMITTER: u32 = u32::MAX;
 /// A primitive reference in `FlatScene::prims`: the index of a triangle, or of a sphere with this
 /// bit set.
 pub const PRIM_SPHERE_BIT: u32 = 1 << 31;
+
+/// An entry of `FlatScene::prims` that no leaf covers: the gap before a leaf that starts at the
+/// next multiple of four (`bvh::flatten`).
+pub const PRIM_PADDING: u32 = u32::MAX;
 
 /// A triangle: vertices as given (the winding fixes an emitter's front), its material, its row
 /// in the emitter table, and its unit normal, computed once here rather than at every hit (a
@@ -145,6 +150,9 @@ pub struct FlatScene {
     pub emitters: Vec<Emitter>,
     pub nodes: Vec<BvhNode>,
     pub prims: Vec<u32>,
+    /// The CPU's alone: the leaves' triangles four to a SIMD pack (`bvh::triangle_packs`),
+    /// derived from `triangles` and `prims`; the shader reads those instead.
+    pub packs: Vec<TrianglePack>,
 }
 
 fn f3(v: [f64; 3]) -> [f32; 3] {
@@ -220,6 +228,7 @@ impl FlatScene {
         let emitters = build_emitter_table(&mut triangles, &materials);
         let (nodes, prims) = bvh::build(&triangles, &spheres);
         FlatScene {
+            packs: bvh::triangle_packs(&triangles, &prims),
             triangles,
             spheres,
             materials,

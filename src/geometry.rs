@@ -149,6 +149,127 @@ pub fn intersect_triangle(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
     })
 }
 
+/// Up to four triangles of one BVH leaf as a structure of arrays (one `Vec4` per coordinate,
+/// one lane per triangle), with the edges `e1 = v1 - v0` and `e2 = v2 - v0` stored rounded
+/// exactly as [`intersect_triangle`] rounds them, so that [`intersect_triangles4`] tests the four
+/// in SIMD lanes with the same arithmetic. Built by the BVH for the CPU only
+/// (`FlatScene::packs`); the shader tests a leaf's triangles one at a time. A lane that holds no
+/// triangle has zero edges (det = 0 never hits); `spheres` marks the lanes whose primitive is a
+/// sphere, tested one by one after the triangles.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug)]
+pub struct TrianglePack {
+    pub v0: [Vec4; 3],
+    pub e1: [Vec4; 3],
+    pub e2: [Vec4; 3],
+    pub spheres: u32,
+}
+
+impl Default for TrianglePack {
+    fn default() -> Self {
+        TrianglePack {
+            v0: [Vec4::ZERO; 3],
+            e1: [Vec4::ZERO; 3],
+            e2: [Vec4::ZERO; 3],
+            spheres: 0,
+        }
+    }
+}
+
+impl TrianglePack {
+    /// Puts `tri` in lane `lane`.
+    pub fn set_triangle(&mut self, lane: usize, tri: &Triangle) {
+        let v0 = Vec3::from(tri.v0);
+        let e1 = Vec3::from(tri.v1) - v0;
+        let e2 = Vec3::from(tri.v2) - v0;
+        for axis in 0..3 {
+            self.v0[axis][lane] = v0[axis];
+            self.e1[axis][lane] = e1[axis];
+            self.e2[axis][lane] = e2[axis];
+        }
+    }
+}
+
+/// A ray's origin and direction, each coordinate splatted over four lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray4 {
+    pub o: [Vec4; 3],
+    pub d: [Vec4; 3],
+}
+
+impl Ray4 {
+    #[inline]
+    pub fn new(ray: &Ray) -> Ray4 {
+        Ray4 {
+            o: ray.o.to_array().map(Vec4::splat),
+            d: ray.d.to_array().map(Vec4::splat),
+        }
+    }
+}
+
+/// What [`intersect_triangles4`] found: bit `lane` of `mask` set where that lane's triangle is
+/// hit, and per lane what [`TriangleHit`] holds.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleHits4 {
+    pub mask: u32,
+    pub t: [f32; 4],
+    pub t_err: [f32; 4],
+    pub b1: [f32; 4],
+    pub b2: [f32; 4],
+}
+
+/// [`intersect_triangle`] on four triangles at once, one per lane. Every lane performs the
+/// scalar test's operations in the scalar test's order (the cross and dot products expanded as
+/// glam writes them, no fused multiply-adds), so a lane's hit, `t`, error bound and barycentrics
+/// are bit for bit the scalar test's: the early exits become lane masks and nothing else
+/// changes. A miss costs the whole test, but four triangles cost one test and no mispredicted
+/// branches.
+#[inline]
+pub fn intersect_triangles4(ray: &Ray4, pack: &TrianglePack) -> TriangleHits4 {
+    let [ox, oy, oz] = ray.o;
+    let [dx, dy, dz] = ray.d;
+    let [v0x, v0y, v0z] = pack.v0;
+    let [e1x, e1y, e1z] = pack.e1;
+    let [e2x, e2y, e2z] = pack.e2;
+    // pvec = d x e2, det = e1 . pvec
+    let px = dy * e2z - e2y * dz;
+    let py = dz * e2x - e2z * dx;
+    let pz = dx * e2y - e2x * dy;
+    let det = e1x * px + e1y * py + e1z * pz;
+    let sign = Vec4::ONE.copysign(det);
+    let abs_det = det.abs();
+    // s = o - v0, u = (s . pvec) sign
+    let (sx, sy, sz) = (ox - v0x, oy - v0y, oz - v0z);
+    let u = (sx * px + sy * py + sz * pz) * sign;
+    // qvec = s x e1, v = (d . qvec) sign
+    let qx = sy * e1z - e1y * sz;
+    let qy = sz * e1x - e1z * sx;
+    let qz = sx * e1y - e1x * sy;
+    let v = (dx * qx + dy * qy + dz * qz) * sign;
+    let inv_det = Vec4::ONE / abs_det;
+    let t = (e2x * qx + e2y * qy + e2z * qz) * sign * inv_det;
+    // t_err = gamma(7) (|e2| . (|s| x |e1|)) / |det|
+    let (ax, ay, az) = (sx.abs(), sy.abs(), sz.abs());
+    let (bx, by, bz) = (e1x.abs(), e1y.abs(), e1z.abs());
+    let (cx, cy, cz) = (ay * bz + az * by, az * bx + ax * bz, ax * by + ay * bx);
+    let t_err =
+        Vec4::splat(gamma(7)) * (e2x.abs() * cx + e2y.abs() * cy + e2z.abs() * cz) * inv_det;
+    // The scalar test's exits, in its order, as masks (each written so a NaN fails as there).
+    let hit = det.cmpne(Vec4::ZERO)
+        & u.cmpge(Vec4::ZERO)
+        & u.cmple(abs_det)
+        & !v.cmplt(Vec4::ZERO)
+        & !(u + v).cmpgt(abs_det)
+        & t.cmpgt(t_err);
+    TriangleHits4 {
+        mask: hit.bitmask(),
+        t: t.to_array(),
+        t_err: t_err.to_array(),
+        b1: (u * inv_det).to_array(),
+        b2: (v * inv_det).to_array(),
+    }
+}
+
 /// A candidate sphere intersection: the nearest root above its error bound.
 #[derive(Clone, Copy, Debug)]
 pub struct SphereHit {
@@ -244,10 +365,11 @@ pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
 /// The slab test (Kay and Kajiya) against the four children's boxes of a BVH node at once, with
 /// pbrt-v4's 1 + 2 gamma(3) widening of the far distance so that rounding never culls a box the
 /// ray touches. Returns, per child slot, the distance at which the ray enters its box (0 when it
-/// starts inside), or -1 when it misses the box, enters it beyond `t_max` or the slot is empty
-/// (-1, not infinity, because WGSL has no infinity).
+/// starts inside), and a mask with bit c set where the ray enters child c's box no later than
+/// `t_max` and the slot is not empty. (The shader returns -1 for the misses instead, as WGSL has
+/// no bitmask of a comparison.)
 #[inline]
-pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32; 4] {
+pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f32; 4], u32) {
     let slab = |lo: [f32; 4], hi: [f32; 4], o: f32, inv_d: f32| {
         let t_lo = (Vec4::from(lo) - Vec4::splat(o)) * inv_d;
         let t_hi = (Vec4::from(hi) - Vec4::splat(o)) * inv_d;
@@ -258,19 +380,12 @@ pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> [f32
     let (near_z, far_z) = slab(node.min_z, node.max_z, o.z, inv_d.z);
     let t_near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
     let t_far = far_x.min(far_y).min(far_z) * (1.0 + 2.0 * gamma(3));
-    let t = Vec4::select(
-        t_near.cmple(t_far.min(Vec4::splat(t_max))),
-        t_near,
-        Vec4::splat(-1.0),
-    )
-    .to_array();
-    std::array::from_fn(|c| {
-        if node.count[c] == EMPTY_SLOT {
-            -1.0
-        } else {
-            t[c]
-        }
-    })
+    let entered = t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask();
+    let mut occupied = 0;
+    for (c, &count) in node.count.iter().enumerate() {
+        occupied |= u32::from(count != EMPTY_SLOT) << c;
+    }
+    (t_near.to_array(), entered & occupied)
 }
 
 /// 1/d per component, with zero components nudged to 1e-30 (keeping the sign) so that the slab
@@ -311,6 +426,71 @@ mod tests {
         let h = intersect_triangle(&ray, &tri).unwrap();
         assert!((h.t - 1.0).abs() < 1e-6);
         assert!((h.b1 - 0.25).abs() < 1e-6 && (h.b2 - 0.25).abs() < 1e-6);
+    }
+
+    /// The four-lane test is the scalar test in each lane, bit for bit: hit or miss, t, its
+    /// error bound and the barycentrics, over random triangles and rays, rays along the axes
+    /// (zero direction components), rays leaving a triangle's own surface (where the error
+    /// bound decides) and degenerate triangles (det = 0).
+    #[test]
+    fn four_lane_triangle_test_is_the_scalar_test_in_each_lane() {
+        let rnd = |i: u32, k: u32| {
+            crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, k, 11, 12])[0]) * 2.0 - 1.0
+        };
+        let v = |i: u32, k: u32| [rnd(i, k), rnd(i, k + 1), rnd(i, k + 2)];
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..20_000u32 {
+            let mut tris: [Triangle; 4] = std::array::from_fn(|l| {
+                let l = l as u32 * 9;
+                Triangle::new(v(i, l), v(i, l + 3), v(i, l + 6), 0)
+            });
+            // Every eighth pack has a degenerate triangle (all three vertices on a line).
+            if i % 8 == 0 {
+                let (a, b) = (Vec3::from(tris[1].v0), Vec3::from(tris[1].v1));
+                tris[1].v2 = (a + 0.5 * (b - a)).into();
+            }
+            let mut pack = TrianglePack::default();
+            for (l, t) in tris.iter().enumerate() {
+                pack.set_triangle(l, t);
+            }
+            // Most rays aim at a point of one lane's triangle (barycentrics up to 0.6 each, so
+            // some outside it); every fourth runs along the z axis.
+            let mut o = Vec3::from(v(i, 50)) * 3.0;
+            let (b1, b2) = (0.3 * (rnd(i, 60) + 1.0), 0.3 * (rnd(i, 61) + 1.0));
+            let (aim, _) = triangle_point(&tris[(i / 4 % 4) as usize], b1, b2);
+            let mut d = aim - o;
+            if i % 4 == 1 {
+                d = Vec3::new(0.0, 0.0, d.z.signum());
+            }
+            // Every fourth ray starts on triangle 2's surface.
+            if i % 4 == 2 {
+                (o, _) = triangle_point(&tris[2], 0.3, 0.3);
+                d = Vec3::from(v(i, 40));
+            }
+            let ray = Ray { o, d };
+            let four = intersect_triangles4(&Ray4::new(&ray), &pack);
+            for (l, t) in tris.iter().enumerate() {
+                match intersect_triangle(&ray, t) {
+                    Some(h) => {
+                        hits += 1;
+                        assert!(four.mask & (1 << l) != 0, "pack {i} lane {l}: missed");
+                        let got = [four.t[l], four.t_err[l], four.b1[l], four.b2[l]];
+                        let want = [h.t, h.t_err, h.b1, h.b2];
+                        assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits), "{i} {l}");
+                    }
+                    None => {
+                        misses += 1;
+                        assert!(four.mask & (1 << l) == 0, "pack {i} lane {l}: false hit");
+                    }
+                }
+            }
+            assert_eq!(four.mask >> 4, 0);
+        }
+        // Both outcomes are exercised in quantity.
+        assert!(
+            hits > 10_000 && misses > 10_000,
+            "{hits} hits, {misses} misses"
+        );
     }
 
     #[test]
