@@ -135,7 +135,7 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
 fn surface_hit(ray: Ray, c: Candidate) -> SurfaceHit {
     if (c.prim & PRIM_SPHERE_BIT) == 0u {
         let tri = triangles[c.prim];
-        let pe = triangle_point(tri, c.b1, c.b2);
+        let pe = triangle_hit_point(tri, c.b1, c.b2);
         return SurfaceHit(c.t, pe.p, pe.p_err, triangle_normal(tri), tri.material, c.prim);
     }
     var hit = sphere_point(ray, spheres[c.prim & ~PRIM_SPHERE_BIT], c.t);

@@ -175,6 +175,27 @@ fn triangle_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
     return PointWithError(p, p_err);
 }
 
+// The point of a triangle hit at (b1, b2), moved into the triangle where it lies closer to an
+// edge than its own error bound, for spawning rays from it: each barycentric raised to at least
+// m |e_i| / (2A), m twice the L1 norm of the error box, and the three renormalised
+// (`triangle_hit_point` in src/geometry.rs says why).
+fn triangle_hit_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
+    let pe = triangle_point(tri, b1, b2);
+    let b = vec3<f32>(1.0 - b1 - b2, b1, b2);
+    let two_area = dot(cross(tri.v1 - tri.v0, tri.v2 - tri.v0), tri.n);
+    let margin = 2.0 * (pe.p_err.x + pe.p_err.y + pe.p_err.z);
+    let edges = vec3<f32>(length(tri.v2 - tri.v1), length(tri.v2 - tri.v0), length(tri.v1 - tri.v0));
+    let least = edges * (margin / two_area);
+    if all(b >= least) || !(two_area > 0.0) {
+        return pe;
+    }
+    var c = max(b, least);
+    c = c / (c.x + c.y + c.z);
+    let p = c.x * tri.v0 + c.y * tri.v1 + c.z * tri.v2;
+    let p_err = gamma(7.0) * (abs(c.x * tri.v0) + abs(c.y * tri.v1) + abs(c.z * tri.v2));
+    return PointWithError(p, p_err);
+}
+
 // The unit geometric normal, stored with the triangle (`Triangle::new`).
 fn triangle_normal(tri: Triangle) -> vec3<f32> {
     return tri.n;

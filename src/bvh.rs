@@ -8,7 +8,7 @@ use crate::flat::{
 };
 use crate::geometry::{
     intersect_aabb4, intersect_sphere, intersect_triangles4, safe_inverse, sphere_point,
-    triangle_normal, triangle_point, Ray, Ray4, SurfaceHit, TrianglePack,
+    triangle_hit_point, triangle_normal, Ray, Ray4, SurfaceHit, TrianglePack,
 };
 use arrayvec::ArrayVec;
 use glam::Vec3;
@@ -83,7 +83,9 @@ impl Built {
 }
 
 /// Builds the BVH over all triangles and spheres; returns the nodes (root first) and the
-/// primitive references that leaves index into.
+/// primitive references that leaves index into: every primitive once, each leaf starting at a
+/// multiple of four, with [`PRIM_PADDING`] entries in the gaps and at the end (so `prims` is
+/// not one entry per primitive).
 pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u32>) {
     let mut info: Vec<PrimInfo> = Vec::with_capacity(triangles.len() + spheres.len());
     for (i, t) in triangles.iter().enumerate() {
@@ -424,6 +426,7 @@ fn traverse(
                 node.child[c] as usize,
                 (node.child[c] + node.count[c]) as usize,
             );
+            debug_assert!(first % 4 == 0, "a leaf starts at a multiple of four");
             for k in (first..end).step_by(4) {
                 let pack = &scene.packs[k / 4];
                 let hits = intersect_triangles4(&ray4, pack);
@@ -490,7 +493,7 @@ fn traverse(
 fn surface_hit(scene: &FlatScene, ray: &Ray, c: Candidate) -> SurfaceHit {
     if c.prim & PRIM_SPHERE_BIT == 0 {
         let tri = &scene.triangles[c.prim as usize];
-        let (p, p_err) = triangle_point(tri, c.b1, c.b2);
+        let (p, p_err) = triangle_hit_point(tri, c.b1, c.b2);
         SurfaceHit {
             t: c.t,
             p,
@@ -675,6 +678,64 @@ mod tests {
                     "ray {i}, t_max {t_max}"
                 );
             }
+        }
+    }
+
+    /// A leaf larger than four primitives (the depth limit makes them), triangles and spheres
+    /// mixed, spans several packs: the traversal tests all of it, the spheres after the
+    /// triangles, and finds what testing every primitive finds.
+    #[test]
+    fn a_leaf_of_many_packs_agrees_with_brute_force() {
+        let rnd = |i, k| rnd(9, i, k);
+        let tris = triangle_soup(11, 9, 4.0, -0.5);
+        let spheres: Vec<Sphere> = (0..3u32)
+            .map(|i| Sphere {
+                center: [rnd(i, 30) * 4.0, rnd(i, 31) * 4.0, rnd(i, 32) * 4.0],
+                radius: 0.5,
+                ..Default::default()
+            })
+            .collect();
+        let info: Vec<PrimInfo> = (0..14u32)
+            .map(|i| PrimInfo {
+                bounds: Aabb {
+                    min: Vec3::splat(-2.0),
+                    max: Vec3::splat(6.0),
+                },
+                centroid: Vec3::ZERO,
+                // Spheres first in the builder's order, so the flattening must move them.
+                id: if i < 3 { i | PRIM_SPHERE_BIT } else { i - 3 },
+            })
+            .collect();
+        let leaf = Built::Leaf {
+            bounds: info[0].bounds,
+            offset: 0,
+            count: 14,
+        };
+        let (mut nodes, mut prims) = (Vec::new(), Vec::new());
+        flatten(&leaf, &info, &mut nodes, &mut prims);
+        prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
+        assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
+        assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
+        let scene = FlatScene {
+            packs: triangle_packs(&tris, &prims),
+            triangles: tris.clone(),
+            spheres: spheres.clone(),
+            nodes,
+            prims,
+            ..Default::default()
+        };
+        for i in 0..2000u32 {
+            let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 4.0;
+            let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+            let ray = Ray { o, d };
+            let (nearest, _) = brute_force(&tris, &spheres, &ray, f32::INFINITY);
+            let got = intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+            assert_eq!(got, nearest, "ray {i}");
+            assert_eq!(
+                occluded(&scene, &ray, 1.0),
+                brute_force(&tris, &spheres, &ray, 1.0).1,
+                "ray {i}"
+            );
         }
     }
 

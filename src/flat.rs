@@ -22,7 +22,8 @@ pub const KIND_EMITTER: u32 = 3;
 pub const NOT_AN_EMITTER: u32 = u32::MAX;
 
 /// A primitive reference in `FlatScene::prims`: the index of a triangle, or of a sphere with this
-/// bit set.
+/// bit set. [`PRIM_PADDING`] has this bit set too: code that reads `prims` other than through
+/// a leaf's range must test for padding first.
 pub const PRIM_SPHERE_BIT: u32 = 1 << 31;
 
 /// An entry of `FlatScene::prims` that no leaf covers: the gap before a leaf that starts at the

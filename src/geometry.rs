@@ -343,6 +343,41 @@ pub fn triangle_point(tri: &Triangle, b1: f32, b2: f32) -> (Vec3, Vec3) {
     (p, p_err)
 }
 
+/// The point of a triangle hit at barycentrics (b1, b2), moved into the triangle where it lies
+/// closer to an edge than its own error bound, for spawning rays from it.
+///
+/// [`offset_ray_origin`] moves a point off its triangle's plane along the normal, which takes it
+/// past the error box across that plane but not across the planes of the neighbouring faces: a
+/// hit on the edge where two faces of a closed box meet at 90 degrees is computed on, or one ulp
+/// beyond, the other face's plane, and a ray spawned there can leave through that face
+/// (`tests/stability_thin.rs`). So each barycentric b_i is raised to at least
+/// m |e_i| / (2 A), which puts the point at distance >= m from edge e_i (opposite vertex i; 2A
+/// = |e1 x e2|), m twice the L1 norm of the error box, and the three renormalised. Points
+/// farther inside than that (all but a sliver of width ~1e-6 relative along the edges) are
+/// returned as [`triangle_point`] computes them; the others move by about m, within the
+/// triangle. A triangle too small for such a margin gets the point nearest its centroid the
+/// clamp gives, still on the triangle.
+#[inline]
+pub fn triangle_hit_point(tri: &Triangle, b1: f32, b2: f32) -> (Vec3, Vec3) {
+    let (p, p_err) = triangle_point(tri, b1, b2);
+    let b = Vec3::new(1.0 - b1 - b2, b1, b2);
+    let (p0, p1, p2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
+    let two_area = (p1 - p0).cross(p2 - p0).dot(Vec3::from(tri.n));
+    let margin = 2.0 * (p_err.x + p_err.y + p_err.z);
+    let edges = Vec3::new((p2 - p1).length(), (p2 - p0).length(), (p1 - p0).length());
+    let least = edges * (margin / two_area);
+    // A degenerate (or NaN) area leaves the point as it is.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if b.cmpge(least).all() || !(two_area > 0.0) {
+        return (p, p_err);
+    }
+    let b = b.max(least);
+    let b = b / (b.x + b.y + b.z);
+    let p = b.x * p0 + b.y * p1 + b.z * p2;
+    let p_err = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
+    (p, p_err)
+}
+
 /// Unit geometric normal of a triangle, (v1 - v0) x (v2 - v0) normalised (stored with it).
 #[inline]
 pub fn triangle_normal(tri: &Triangle) -> Vec3 {
@@ -366,8 +401,8 @@ pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
 /// pbrt-v4's 1 + 2 gamma(3) widening of the far distance so that rounding never culls a box the
 /// ray touches. Returns, per child slot, the distance at which the ray enters its box (0 when it
 /// starts inside), and a mask with bit c set where the ray enters child c's box no later than
-/// `t_max` and the slot is not empty. (The shader returns -1 for the misses instead, as WGSL has
-/// no bitmask of a comparison.)
+/// `t_max` and the slot is not empty. (The shader returns -1 for the misses and builds the mask
+/// from the distances; here SSE's movemask gives it in one instruction.)
 #[inline]
 pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f32; 4], u32) {
     let slab = |lo: [f32; 4], hi: [f32; 4], o: f32, inv_d: f32| {
@@ -490,6 +525,43 @@ mod tests {
         assert!(
             hits > 10_000 && misses > 10_000,
             "{hits} hits, {misses} misses"
+        );
+    }
+
+    /// A hit on the bottom face of a box right at its edge with the wall x = 1 (where the
+    /// bottom face's own point can round onto or past the wall's plane) yields a spawn point
+    /// strictly inside the wall's half-space x < 1, moved by no more than a few error bounds.
+    /// Power: the unmoved points of the same hits land on x >= 1 for a good share of them.
+    #[test]
+    fn hit_points_near_an_edge_stay_inside_the_adjacent_face() {
+        let tri = Triangle::new([-1.0, -1.0, 1e-4], [1.0, -1.0, 1e-4], [1.0, 1.0, 1e-4], 0);
+        let mut unmoved_outside = 0;
+        for i in 0..10_000u32 {
+            let b1 = crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, 0, 3, 4])[0]);
+            // b0 = 1 - b1 - b2 exactly 0, or a few ulps either side of it.
+            let b2 = 1.0 - b1 + (i % 5) as f32 * 1e-8 - 2e-8;
+            let (plain, plain_err) = triangle_point(&tri, b1, b2);
+            let (p, p_err) = triangle_hit_point(&tri, b1, b2);
+            unmoved_outside += u32::from(plain.x >= 1.0);
+            assert!(
+                p.x < 1.0,
+                "hit {i}: spawn point {p} on or past the wall x = 1"
+            );
+            let o = offset_ray_origin(p, p_err, triangle_normal(&tri), Vec3::new(1.0, 0.0, 1.0));
+            assert!(
+                o.x < 1.0,
+                "hit {i}: spawned origin {o} on or past the wall x = 1"
+            );
+            let bound = 8.0 * (plain_err.x + plain_err.y + plain_err.z);
+            assert!(
+                (p - plain).length() <= bound,
+                "hit {i}: moved {}",
+                (p - plain).length()
+            );
+        }
+        assert!(
+            unmoved_outside > 1_000,
+            "{unmoved_outside} unmoved points outside"
         );
     }
 

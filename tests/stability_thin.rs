@@ -12,26 +12,27 @@
 //! pixels on either backend).
 //!
 //! Known leak (a finding, not hidden): at 4096 spp (16.8 M samples per view, seed 54) the CPU
-//! backend lit 8 pixels of the corner view and 5 of the edge view (13 samples in 33.6 M, 0.39
-//! per million; with the division-free Möller–Trumbore of 2026-11-23, which rounds the v1–v2 edge
-//! test differently; the earlier code leaked 4 + 4, 0.24 per million), each a single sample of
-//! 0.005 to 0.36 in one pixel; the GPU backend (lavapipe), drawing the same random numbers,
-//! leaked 2 in the corner view with the earlier code. Replaying the earlier code's 8: 2 are rays
-//! through the shared diagonal of two coplanar
-//! triangles (a shadow ray through the top face at (0.99299, 0.99299, 2), one through the +y
-//! wall), which Möller–Trumbore's edge tests, rounded differently in the two triangles, both
-//! reject; 6 are hits on an edge where two faces meet at 90 degrees, whose computed point lies on
-//! or one ulp beyond the adjacent face's plane (e.g. (1.0000001, −0.457, 1e-4) on the bottom
-//! face): the spawned ray is offset along the hit face's normal only, so it starts on or outside
-//! the adjacent face and leaves through it (that face's hit at t ≈ 0 is below its error bound).
-//! Both live in `src/geometry.rs` (intersection and ray spawning): a watertight triangle test
-//! (pbrt-v4's) would close the first kind, and spawning from a point pulled into the triangle by
-//! its error bound the second. At 64 spp the expected number of such leaks in this test is
-//! about 0.2, so it passes with probability about 0.8 whatever the seed; it has power against
-//! leaks of 10 or more per million (P(miss) < 1 %), and
-//! `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails today; 30 s)
-//! states the property at the rate where it fails. (The issue's own statistic, the region's
-//! mean within 4 s.e. of 0, holds even there: 13 leaking samples give z ≤ √13 ≈ 3.6.)
+//! backend lights 1 pixel of the corner view and 1 of the edge view (2 samples in 33.6 M, 0.06
+//! per million). It lit 8 + 5 (0.39 per million) before rays were spawned from a hit point
+//! pulled into its triangle (`geometry::triangle_hit_point`). Replaying the leaks of the code
+//! before that, 2 of 8 were rays through the shared diagonal of two coplanar triangles (a
+//! shadow ray through the top face at (0.99299, 0.99299, 2), one through the +y wall), which
+//! Möller–Trumbore's edge tests, rounded differently in the two triangles, both reject; 6 were
+//! hits on an edge where two faces meet at 90 degrees, whose computed point lay on or one ulp
+//! beyond the adjacent face's plane (e.g. (1.0000001, −0.457, 1e-4) on the bottom face), so that
+//! the spawned ray, offset along the hit face's normal only, started outside the adjacent face
+//! and left through it (that face's hit at t ≈ 0 was below its error bound). The pulled-in hit
+//! point closes the second kind; the two left are presumably of the first. pbrt-v4's watertight
+//! triangle test, which closes the first kind, was tried on both backends with the pulled-in
+//! point (2026-11-23) and leaked 196 + 261 pixels: its bound on t's rounding error (about
+//! 80 eps times the vertices' distance from the ray origin, against Möller–Trumbore's bound
+//! near gamma(7) times the same products) rejects the adjacent face's genuine hit at t of the
+//! order of the pull-in distance, so rays near a 90-degree edge leave through it. At 64 spp the
+//! expected number of leaks in this test is about 0.03, so it passes with probability about
+//! 0.97 whatever the seed; it has power against leaks of 10 or more per million (P(miss) <
+//! 1 %), and `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails today;
+//! 30 s) states the property at the rate where it fails. (The issue's own statistic, the
+//! region's mean within 4 s.e. of 0, holds even there.)
 //!
 //! (b) A glass slab (ior 1.5, tint 1) 1e-4 thick in front of a uniform emitter Le = 1 that fills
 //! the view: with incoherent internal reflections the model transmits exactly
@@ -120,8 +121,8 @@ fn thin_closed_box_is_black_inside_on_the_gpu() {
 /// The same property at 4096 spp (16.8 M samples per view), where the leaks described in the
 /// header appear: run with `--ignored` after changing the intersection or the ray spawning.
 #[test]
-#[ignore = "fails: 13 of 33.6 M samples leak, 8 + 5 pixels in the two views (shared-edge cracks \
-            and edge hits in src/geometry.rs, see the file header); 30 s"]
+#[ignore = "fails: 2 of 33.6 M samples leak, 1 + 1 pixels in the two views (presumably \
+            shared-diagonal cracks of Möller–Trumbore, see the file header); 30 s"]
 fn thin_closed_box_is_black_inside_at_16_million_samples() {
     let views = box_views(BOX, &|s| {
         render_cpu_scene(s, SIZE, SIZE, 4096, 54, Faults::NONE)

@@ -103,8 +103,9 @@ fn upload<T: Pod>(
     })
 }
 
-/// The primitive references packed four to a vec4<u32> (zero-padded), as both residencies
-/// declare them.
+/// The primitive references packed four to a vec4<u32>, as both residencies declare them (the
+/// BVH build pads `prims` to a multiple of four with `PRIM_PADDING`; only an empty scene's
+/// array is zero-filled here).
 fn packed_prims(scene: &FlatScene) -> Vec<[u32; 4]> {
     scene
         .prims
