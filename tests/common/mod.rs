@@ -13,9 +13,16 @@ use std::path::{Path, PathBuf};
 
 pub mod reference;
 
-/// A path under the repository root.
+/// A path under the repository root: the one the tests were built in, or, when the test binary
+/// runs on another machine (built here, run beside a GPU), the working directory, which must
+/// then be a copy of the repository.
 pub fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+    let built_in = Path::new(env!("CARGO_MANIFEST_DIR"));
+    if built_in.join("Cargo.toml").exists() {
+        built_in.join(rel)
+    } else {
+        PathBuf::from(rel)
+    }
 }
 
 pub fn load(rel: &str) -> (Scene, FlatScene) {
