@@ -184,7 +184,11 @@ fn triangle_hit_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
     let b = vec3<f32>(1.0 - b1 - b2, b1, b2);
     let two_area = dot(cross(tri.v1 - tri.v0, tri.v2 - tri.v0), tri.n);
     let margin = 2.0 * (pe.p_err.x + pe.p_err.y + pe.p_err.z);
-    let edges = vec3<f32>(length(tri.v2 - tri.v1), length(tri.v2 - tri.v0), length(tri.v1 - tri.v0));
+    let edges = vec3<f32>(
+        length(tri.v2 - tri.v1),
+        length(tri.v2 - tri.v0),
+        length(tri.v1 - tri.v0),
+    );
     let least = edges * (margin / two_area);
     if all(b >= least) || !(two_area > 0.0) {
         return pe;

@@ -8,7 +8,7 @@ use crate::flat::{
 };
 use crate::geometry::{
     intersect_aabb4, intersect_sphere, intersect_triangles4, safe_inverse, sphere_point,
-    triangle_hit_point, triangle_normal, Ray, Ray4, SurfaceHit, TrianglePack,
+    triangle_hit_point, triangle_normal, Ray, Ray4, SurfaceHit, TriangleHits4, TrianglePack,
 };
 use arrayvec::ArrayVec;
 use glam::Vec3;
@@ -429,7 +429,11 @@ fn traverse(
             debug_assert!(first % 4 == 0, "a leaf starts at a multiple of four");
             for k in (first..end).step_by(4) {
                 let pack = &scene.packs[k / 4];
-                let hits = intersect_triangles4(&ray4, pack);
+                let hits = if pack.triangles != 0 {
+                    intersect_triangles4(&ray4, pack)
+                } else {
+                    TriangleHits4::MISS
+                };
                 let mut lanes = hits.mask;
                 while lanes != 0 {
                     let l = lanes.trailing_zeros() as usize;

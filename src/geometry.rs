@@ -163,6 +163,8 @@ pub struct TrianglePack {
     pub e1: [Vec4; 3],
     pub e2: [Vec4; 3],
     pub spheres: u32,
+    /// The lanes that hold a triangle (a pack of spheres alone skips the four-lane test).
+    pub triangles: u32,
 }
 
 impl Default for TrianglePack {
@@ -172,6 +174,7 @@ impl Default for TrianglePack {
             e1: [Vec4::ZERO; 3],
             e2: [Vec4::ZERO; 3],
             spheres: 0,
+            triangles: 0,
         }
     }
 }
@@ -187,6 +190,7 @@ impl TrianglePack {
             self.e1[axis][lane] = e1[axis];
             self.e2[axis][lane] = e2[axis];
         }
+        self.triangles |= 1 << lane;
     }
 }
 
@@ -216,6 +220,17 @@ pub struct TriangleHits4 {
     pub t_err: [f32; 4],
     pub b1: [f32; 4],
     pub b2: [f32; 4],
+}
+
+impl TriangleHits4 {
+    /// No lane hit.
+    pub const MISS: TriangleHits4 = TriangleHits4 {
+        mask: 0,
+        t: [0.0; 4],
+        t_err: [0.0; 4],
+        b1: [0.0; 4],
+        b2: [0.0; 4],
+    };
 }
 
 /// [`intersect_triangle`] on four triangles at once, one per lane. Every lane performs the
