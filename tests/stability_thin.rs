@@ -22,7 +22,8 @@
 //! beyond the adjacent face's plane (e.g. (1.0000001, −0.457, 1e-4) on the bottom face), so that
 //! the spawned ray, offset along the hit face's normal only, started outside the adjacent face
 //! and left through it (that face's hit at t ≈ 0 was below its error bound). The pulled-in hit
-//! point closes the second kind; the two left are presumably of the first. pbrt-v4's watertight
+//! point closes the second kind; the two left are presumably of the first (a pull-in margin four
+//! times as wide leaves the same 1 + 1: not a matter of the margin). pbrt-v4's watertight
 //! triangle test, which closes the first kind, was tried on both backends with the pulled-in
 //! point (2026-11-23) and leaked 196 + 261 pixels: its bound on t's rounding error (about
 //! 80 eps times the vertices' distance from the ray origin, against Möller–Trumbore's bound
