@@ -169,9 +169,14 @@ struct PointWithError {
 
 // The point at barycentrics (b0, b1, b2), with the bound gamma(7) sum |b_i p_i| (pbrt-v4 eq. 6.34).
 fn triangle_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
-    let b0 = 1.0 - b1 - b2;
-    let p = b0 * tri.v0 + b1 * tri.v1 + b2 * tri.v2;
-    let p_err = gamma(7.0) * (abs(b0 * tri.v0) + abs(b1 * tri.v1) + abs(b2 * tri.v2));
+    return triangle_point_at(tri, vec3<f32>(1.0 - b1 - b2, b1, b2));
+}
+
+// The point of a triangle at barycentrics b = (b0, b1, b2), with the bound
+// gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|) on its error.
+fn triangle_point_at(tri: Triangle, b: vec3<f32>) -> PointWithError {
+    let p = b.x * tri.v0 + b.y * tri.v1 + b.z * tri.v2;
+    let p_err = gamma(7.0) * (abs(b.x * tri.v0) + abs(b.y * tri.v1) + abs(b.z * tri.v2));
     return PointWithError(p, p_err);
 }
 
@@ -193,11 +198,8 @@ fn triangle_hit_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
     if all(b >= least) || !(two_area > 0.0) {
         return pe;
     }
-    var c = max(b, least);
-    c = c / (c.x + c.y + c.z);
-    let p = c.x * tri.v0 + c.y * tri.v1 + c.z * tri.v2;
-    let p_err = gamma(7.0) * (abs(c.x * tri.v0) + abs(c.y * tri.v1) + abs(c.z * tri.v2));
-    return PointWithError(p, p_err);
+    let raised = max(b, least);
+    return triangle_point_at(tri, raised / (raised.x + raised.y + raised.z));
 }
 
 // The unit geometric normal, stored with the triangle (`Triangle::new`).

@@ -123,13 +123,17 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
         });
         return (nodes, Vec::new());
     }
-    let mut prims = Vec::with_capacity(n);
-    flatten(
-        &build_node(&mut info, 0, n, 0),
-        &info,
-        &mut nodes,
-        &mut prims,
-    );
+    flatten_root(&build_node(&mut info, 0, n, 0), &info, nodes)
+}
+
+/// Flattens the tree `root` into `nodes` and the padded `prims` that [`build`] returns.
+fn flatten_root(
+    root: &Built,
+    info: &[PrimInfo],
+    mut nodes: Vec<BvhNode>,
+) -> (Vec<BvhNode>, Vec<u32>) {
+    let mut prims = Vec::with_capacity(info.len());
+    flatten(root, info, &mut nodes, &mut prims);
     prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
     (nodes, prims)
 }
@@ -632,6 +636,15 @@ mod tests {
 
     fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
         let (nodes, prims) = build(&tris, &spheres);
+        scene_with(tris, spheres, nodes, prims)
+    }
+
+    fn scene_with(
+        tris: Vec<Triangle>,
+        spheres: Vec<Sphere>,
+        nodes: Vec<BvhNode>,
+        prims: Vec<u32>,
+    ) -> FlatScene {
         FlatScene {
             packs: triangle_packs(&tris, &prims),
             triangles: tris,
@@ -640,6 +653,25 @@ mod tests {
             prims,
             ..Default::default()
         }
+    }
+
+    /// The scene's nearest hit along `ray` and whether it blocks the segment (0, 1) are what
+    /// testing every primitive of `tris` and `spheres` gives.
+    fn assert_ray_agrees(
+        scene: &FlatScene,
+        tris: &[Triangle],
+        spheres: &[Sphere],
+        ray: &Ray,
+        what: &str,
+    ) {
+        let (nearest, _) = brute_force(tris, spheres, ray, f32::INFINITY);
+        let got = intersect_closest(scene, ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+        assert_eq!(got, nearest, "{what}");
+        assert_eq!(
+            occluded(scene, ray, 1.0),
+            brute_force(tris, spheres, ray, 1.0).1,
+            "{what}"
+        );
     }
 
     /// The BVH must find exactly what testing every primitive finds: the nearest hit, and for
@@ -715,31 +747,14 @@ mod tests {
             offset: 0,
             count: 14,
         };
-        let (mut nodes, mut prims) = (Vec::new(), Vec::new());
-        flatten(&leaf, &info, &mut nodes, &mut prims);
-        prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
+        let (nodes, prims) = flatten_root(&leaf, &info, Vec::new());
         assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
         assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
-        let scene = FlatScene {
-            packs: triangle_packs(&tris, &prims),
-            triangles: tris.clone(),
-            spheres: spheres.clone(),
-            nodes,
-            prims,
-            ..Default::default()
-        };
+        let scene = scene_with(tris.clone(), spheres.clone(), nodes, prims);
         for i in 0..2000u32 {
             let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 4.0;
             let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
-            let ray = Ray { o, d };
-            let (nearest, _) = brute_force(&tris, &spheres, &ray, f32::INFINITY);
-            let got = intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
-            assert_eq!(got, nearest, "ray {i}");
-            assert_eq!(
-                occluded(&scene, &ray, 1.0),
-                brute_force(&tris, &spheres, &ray, 1.0).1,
-                "ray {i}"
-            );
+            assert_ray_agrees(&scene, &tris, &spheres, &Ray { o, d }, &format!("ray {i}"));
         }
     }
 
@@ -758,16 +773,8 @@ mod tests {
             for i in 0..500u32 {
                 let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 2.0 - 0.5;
                 let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
-                let ray = Ray { o, d };
-                let (nearest, _) = brute_force(&tris, &[], &ray, f32::INFINITY);
-                let got =
-                    intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
-                assert_eq!(got, nearest, "{n} triangles, ray {i}");
-                assert_eq!(
-                    occluded(&scene, &ray, 1.0),
-                    brute_force(&tris, &[], &ray, 1.0).1,
-                    "{n} triangles, ray {i}"
-                );
+                let what = format!("{n} triangles, ray {i}");
+                assert_ray_agrees(&scene, &tris, &[], &Ray { o, d }, &what);
             }
         }
     }

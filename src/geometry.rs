@@ -347,14 +347,19 @@ pub struct SurfaceHit {
     pub prim: u32,
 }
 
-/// The point of a triangle at barycentrics (b0, b1, b2), with pbrt-v4's bound
-/// gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|) on its error (eq. 6.34).
+/// The point of a triangle at barycentrics (1 - b1 - b2, b1, b2).
 #[inline]
 pub fn triangle_point(tri: &Triangle, b1: f32, b2: f32) -> (Vec3, Vec3) {
-    let b0 = 1.0 - b1 - b2;
+    triangle_point_at(tri, Vec3::new(1.0 - b1 - b2, b1, b2))
+}
+
+/// The point of a triangle at barycentrics b = (b0, b1, b2), with pbrt-v4's bound
+/// gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|) on its error (eq. 6.34).
+#[inline]
+fn triangle_point_at(tri: &Triangle, b: Vec3) -> (Vec3, Vec3) {
     let (p0, p1, p2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
-    let p = b0 * p0 + b1 * p1 + b2 * p2;
-    let p_err = gamma(7) * ((b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs());
+    let p = b.x * p0 + b.y * p1 + b.z * p2;
+    let p_err = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
     (p, p_err)
 }
 
@@ -386,11 +391,8 @@ pub fn triangle_hit_point(tri: &Triangle, b1: f32, b2: f32) -> (Vec3, Vec3) {
     if b.cmpge(least).all() || !(two_area > 0.0) {
         return (p, p_err);
     }
-    let b = b.max(least);
-    let b = b / (b.x + b.y + b.z);
-    let p = b.x * p0 + b.y * p1 + b.z * p2;
-    let p_err = gamma(7) * ((b.x * p0).abs() + (b.y * p1).abs() + (b.z * p2).abs());
-    (p, p_err)
+    let raised = b.max(least);
+    triangle_point_at(tri, raised / (raised.x + raised.y + raised.z))
 }
 
 /// Unit geometric normal of a triangle, (v1 - v0) x (v2 - v0) normalised (stored with it).
