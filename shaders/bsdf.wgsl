@@ -52,6 +52,32 @@ fn refract_through(wo: vec3<f32>, n_in: vec3<f32>, eta_in: f32) -> Refraction {
     return Refraction(true, normalize(wt), eta);
 }
 
+// Which quantity a path carries (`Transport` in src/bsdf.rs): camera subpaths radiance, light
+// subpaths importance (flux), which refraction does not scale by 1 / eta^2.
+const TRANSPORT_RADIANCE: u32 = 0u;
+const TRANSPORT_IMPORTANCE: u32 = 1u;
+
+// The two-sided Lambertian BSDF for a pair of directions (`DiffuseEval` in src/bsdf.rs).
+struct DiffuseEval {
+    // albedo / pi where wo and wi lie on one side, else 0.
+    f: vec3<f32>,
+    // The cosine toward wi (0 where f is).
+    cos_i: f32,
+    // Solid-angle density of wi when sampling from wo: cos_i / pi.
+    pdf: f32,
+    // The reverse: cos_o / pi.
+    pdf_rev: f32,
+}
+
+// Lambert of albedo `albedo` at a surface whose unit normal n_facing points to wo's side.
+fn eval_diffuse(albedo: vec3<f32>, n_facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> DiffuseEval {
+    let cos_i = dot(n_facing, wi);
+    if cos_i <= 0.0 {
+        return DiffuseEval(vec3<f32>(0.0), 0.0, 0.0, 0.0);
+    }
+    return DiffuseEval(albedo * FRAC_1_PI, cos_i, cos_i * FRAC_1_PI, max(dot(n_facing, wo), 0.0) * FRAC_1_PI);
+}
+
 struct BsdfSample {
     wi: vec3<f32>,
     // f |cos theta_i| / pdf.
@@ -62,7 +88,7 @@ struct BsdfSample {
     eta2: f32,
 }
 
-fn sample_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec4<f32>) -> BsdfSample {
+fn sample_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec4<f32>, transport: u32) -> BsdfSample {
     if m.kind == KIND_MIRROR {
         return BsdfSample(reflect_about(wo, n), m.color, 0.0, 1.0);
     }
@@ -73,12 +99,16 @@ fn sample_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec4<f32>) -> BsdfSa
         if u.z < f {
             return BsdfSample(reflect_about(wo, n), vec3<f32>(1.0), 0.0, 1.0);
         }
-        // Radiance scales by 1 / etap^2 across the boundary (pbrt-v4 eq. 9.17).
+        // Radiance scales by 1 / etap^2 across the boundary (pbrt-v4 eq. 9.17); flux
+        // (importance transport, light subpaths) does not.
         let r = refract_through(wo, n, m.ior);
         if !r.possible {
             return BsdfSample(reflect_about(wo, n), vec3<f32>(1.0), 0.0, 1.0);
         }
         let eta2 = r.etap * r.etap;
+        if transport == TRANSPORT_IMPORTANCE {
+            return BsdfSample(r.wt, m.color, 0.0, eta2);
+        }
         return BsdfSample(r.wt, m.color / eta2, 0.0, eta2);
     }
     // Diffuse, and emitters that also reflect: Lambert, f = albedo / pi, sampled with the

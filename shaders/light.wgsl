@@ -47,3 +47,22 @@ fn emitter_pdf_area(tri: u32) -> f32 {
 fn area_to_solid_angle(pdf_area: f32, dist2: f32, cos_light: f32) -> f32 {
     return pdf_area * dist2 / abs(cos_light);
 }
+
+// Where a light subpath starts: a point on an emitter and a direction from its front
+// (`EmissionSample`).
+struct EmissionSample {
+    point: LightSample,
+    dir: vec3<f32>,
+    cos: f32,
+    // cos / pi.
+    pdf_dir: f32,
+}
+
+// An emitter point chosen as sample_emitter chooses it, then a cosine-distributed direction from
+// its front (`sample_emission`).
+fn sample_emission(u_point: vec4<f32>, u_dir: vec4<f32>) -> EmissionSample {
+    let point = sample_emitter(u_point.x, u_point.y, u_point.z);
+    let local = sample_cosine_hemisphere(u_dir.x, u_dir.y);
+    let basis = orthonormal_basis(point.n);
+    return EmissionSample(point, local.x * basis.t + local.y * basis.b + local.z * point.n, local.z, local.z * FRAC_1_PI);
+}

@@ -5,18 +5,6 @@
 const RR_START_BOUNCE: u32 = 3u;
 const RR_MAX_SURVIVAL: f32 = 0.95;
 
-// The ray through image position (x + jx, y + jy), pixel (0, 0) at the top left (`Camera::ray`).
-fn camera_ray(camera: Camera, x: u32, y: u32, jx: f32, jy: f32) -> Ray {
-    let sx = 2.0 * ((f32(x) + jx) / f32(camera.width)) - 1.0;
-    let sy = 1.0 - 2.0 * ((f32(y) + jy) / f32(camera.height));
-    let d = camera.forward + sx * camera.right + sy * camera.up;
-    return Ray(camera.eye, normalize(d));
-}
-
-fn max_element(v: vec3<f32>) -> f32 {
-    return max(max(v.x, v.y), v.z);
-}
-
 // The radiance arriving at pixel (x, y) along one camera sample's path.
 fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
     // N light samples and one BSDF sample per vertex: Veach's multi-sample MIS weighs each
@@ -107,7 +95,7 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
         // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
         // the sample's weight f · |cos θi| / pdf.
         let u_bsdf = draw4(sampler, dim_bsdf(bounce));
-        let bs = sample_bsdf(material, hit.n, wo, u_bsdf);
+        let bs = sample_bsdf(material, hit.n, wo, u_bsdf, TRANSPORT_RADIANCE);
         throughput *= bs.weight;
         if bs.pdf == 0.0 {
             throughput *= frame.specular_scale;
@@ -145,16 +133,8 @@ fn trace_path(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
     return radiance;
 }
 
-// Finite by bit pattern: the exponent is not all ones (x != x is not reliable on every backend).
-fn is_finite(v: vec3<f32>) -> bool {
-    let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
-    return all(e != vec3<u32>(0x7f800000u));
-}
-
 // One invocation per pixel of the dispatch's tile: the frame's samples of that pixel, added to
-// the pass's sums (folded into f64 by the host after the pass), and the running mean updated
-// incrementally, m += (Σx − k·m) / (n + k), which stays accurate in f32 at any sample count,
-// then written to the output texture for a viewer.
+// the pass's sums.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.tile_size.x || gid.y >= frame.tile_size.y {
@@ -178,18 +158,5 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             dropped += 1.0;
         }
     }
-    var sums = pixel_sums[index];
-    sums.sum += sum;
-    sums.sum_sq += sum_sq;
-    sums.n += n;
-    sums.dropped += dropped;
-    pixel_sums[index] = sums;
-
-    var mean = running_mean[index];
-    let total = mean.w + n;
-    if total > 0.0 {
-        mean = vec4<f32>(mean.xyz + (sum - n * mean.xyz) / total, total);
-    }
-    running_mean[index] = mean;
-    textureStore(output, vec2<u32>(x, y), vec4<f32>(mean.xyz, 1.0));
+    add_to_pixel(x, y, sum, sum_sq, n, dropped);
 }

@@ -35,6 +35,15 @@ fn dim_light_extra(bounce: u32, j: u32) -> u32 {
     return 0x80000000u + bounce * 256u + j;
 }
 
+// Light subpaths' own blocks, from 2^30 up (`DIM_EMISSION` in src/sampling.rs): emitter choice
+// and point; direction of emission; then one block per bounce (direction, lobe, roulette).
+const DIM_EMISSION: u32 = 0x40000000u;
+const DIM_EMISSION_DIR: u32 = 0x40000001u;
+
+fn dim_light_bounce(bounce: u32) -> u32 {
+    return 0x40000002u + bounce;
+}
+
 struct Sampler {
     seed: u32,
     pixel: u32,

@@ -78,7 +78,25 @@ struct Frame {
     light_samples: u32,
     // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
     grey_indirect: u32,
+    // METHOD_PATH, METHOD_LIGHT or METHOD_BDPT.
+    method: u32,
+    // N: light subpaths per iteration (one per pixel).
+    n_light_paths: u32,
+    // The iteration's slot in the pass (its image sum and light-vertex counter).
+    slot: u32,
+    // Light vertices the pool holds.
+    vertex_capacity: u32,
+    // The light subpaths of this light-pass dispatch: path_origin .. path_origin + path_count.
+    path_origin: u32,
+    path_count: u32,
+    // Test-only: splats with an importance that lacks one cos theta (`Faults`), 0 or 1.
+    importance_missing_cos: u32,
+    pad0: u32,
 }
+
+const METHOD_PATH: u32 = 0u;
+const METHOD_LIGHT: u32 = 1u;
+const METHOD_BDPT: u32 = 2u;
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).
 struct PixelSums {

@@ -13,6 +13,7 @@ use crate::cpu::Faults;
 use crate::film::Film;
 use crate::flat::FlatScene;
 use crate::gpu::{Checks, Gpu, GpuRenderer, Residency};
+use crate::method::Method;
 use crate::render::{Backend, CpuBackend};
 use crate::scene::Scene;
 use anyhow::{Context, Result};
@@ -37,6 +38,8 @@ pub struct Config {
     pub height: u32,
     pub spp: u32,
     pub seed: u32,
+    /// The methods to time, each on every scene and backend.
+    pub methods: Vec<Method>,
     pub light_samples: u32,
     pub threads: usize,
 }
@@ -48,6 +51,8 @@ pub struct Row {
     pub triangles: usize,
     pub spheres: usize,
     pub backend: Which,
+    #[serde(serialize_with = "method_name")]
+    pub method: Method,
     pub device: String,
     pub width: u32,
     pub height: u32,
@@ -56,7 +61,8 @@ pub struct Row {
     /// Wall seconds of the timed samples.
     pub seconds: f64,
     pub camera_paths_per_second: f64,
-    /// Closest-hit plus shadow rays per camera path (see the module comment).
+    /// Closest-hit plus shadow rays per camera path (light tracing and BDPT: per pixel and
+    /// iteration, the light subpath's rays included; see the module comment).
     pub rays_per_path: f64,
     pub rays_per_second: f64,
     /// Kernel compilation (GPU only; 0 on the CPU).
@@ -82,52 +88,57 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
         let scene = Scene::load(path).map_err(|e| anyhow::anyhow!("{e}"))?;
         let flat = FlatScene::build(&scene);
         let camera = Camera::new(&scene.desc.camera, config.width, config.height);
-        // Rays per path on the first samples of the streams every backend draws.
-        let probe_spp = config.spp.min(4);
-        let mut probe = CpuBackend::new(&flat, camera, config.seed, config.threads)?;
-        probe.light_samples = config.light_samples;
-        probe.pass(0, probe_spp, &mut Film::new(config.width, config.height))?;
-        let paths = |spp: u32| config.width as f64 * config.height as f64 * spp as f64;
-        let rays_per_path = probe.rays as f64 / paths(probe_spp);
+        for &method in &config.methods {
+            // Rays per path on the first samples of the streams every backend draws.
+            let probe_spp = config.spp.min(4);
+            let mut probe = CpuBackend::new(&flat, camera, config.seed, config.threads)?;
+            probe.light_samples = config.light_samples;
+            probe.method = method;
+            probe.pass(0, probe_spp, &mut Film::new(config.width, config.height))?;
+            let paths = |spp: u32| config.width as f64 * config.height as f64 * spp as f64;
+            let rays_per_path = probe.rays as f64 / paths(probe_spp);
 
-        for &which in &config.backends {
-            let (mut backend, compile_seconds) = make_backend(
-                which,
-                &flat,
-                camera,
-                config.seed,
-                config.light_samples,
-                config.threads,
-                gpu,
-            )?;
-            let warm = Instant::now();
-            backend.pass(0, 1, &mut Film::new(config.width, config.height))?;
-            let warmup_seconds = warm.elapsed().as_secs_f64();
+            for &which in &config.backends {
+                let (mut backend, compile_seconds) = make_backend(
+                    which,
+                    &flat,
+                    camera,
+                    config.seed,
+                    method,
+                    config.light_samples,
+                    config.threads,
+                    gpu,
+                )?;
+                let warm = Instant::now();
+                backend.pass(0, 1, &mut Film::new(config.width, config.height))?;
+                let warmup_seconds = warm.elapsed().as_secs_f64();
 
-            let mut film = Film::new(config.width, config.height);
-            let start = Instant::now();
-            backend.pass(0, config.spp, &mut film)?;
-            let seconds = start.elapsed().as_secs_f64();
-            let row = Row {
-                scene: scene.desc.name.clone(),
-                triangles: flat.triangles.len(),
-                spheres: flat.spheres.len(),
-                backend: which,
-                device: backend.device(),
-                width: config.width,
-                height: config.height,
-                spp: config.spp,
-                light_samples: config.light_samples,
-                seconds,
-                camera_paths_per_second: paths(config.spp) / seconds,
-                rays_per_path,
-                rays_per_second: rays_per_path * paths(config.spp) / seconds,
-                compile_seconds,
-                warmup_seconds,
-                image_mean: film.image_mean().0,
-            };
-            on_row(&row);
-            rows.push(row);
+                let mut film = Film::new(config.width, config.height);
+                let start = Instant::now();
+                backend.pass(0, config.spp, &mut film)?;
+                let seconds = start.elapsed().as_secs_f64();
+                let row = Row {
+                    scene: scene.desc.name.clone(),
+                    triangles: flat.triangles.len(),
+                    spheres: flat.spheres.len(),
+                    backend: which,
+                    method,
+                    device: backend.device(),
+                    width: config.width,
+                    height: config.height,
+                    spp: config.spp,
+                    light_samples: config.light_samples,
+                    seconds,
+                    camera_paths_per_second: paths(config.spp) / seconds,
+                    rays_per_path,
+                    rays_per_second: rays_per_path * paths(config.spp) / seconds,
+                    compile_seconds,
+                    warmup_seconds,
+                    image_mean: film.image_mean().0,
+                };
+                on_row(&row);
+                rows.push(row);
+            }
         }
     }
     Ok(Report {
@@ -140,11 +151,13 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
 
 /// A backend of either kind with the CLI's defaults (unchecked kernel, preferred residency),
 /// and the seconds spent building it (the GPU kernel's compilation; 0 for the CPU).
+#[allow(clippy::too_many_arguments)]
 pub fn make_backend<'a>(
     which: Which,
     flat: &'a FlatScene,
     camera: Camera,
     seed: u32,
+    method: Method,
     light_samples: u32,
     threads: usize,
     gpu: Option<&Gpu>,
@@ -154,6 +167,7 @@ pub fn make_backend<'a>(
         Which::Cpu => {
             let mut b = CpuBackend::new(flat, camera, seed, threads)?;
             b.light_samples = light_samples;
+            b.method = method;
             (Box::new(b), 0.0)
         }
         Which::Gpu => {
@@ -167,6 +181,7 @@ pub fn make_backend<'a>(
                 Faults::NONE,
                 Checks::Unchecked,
                 Residency::preferred(&g.info, &g.device.limits(), flat),
+                method,
             )?;
             renderer.set_light_samples(light_samples);
             let b = crate::gpu::GpuBackend {
@@ -176,6 +191,10 @@ pub fn make_backend<'a>(
             (Box::new(b), start.elapsed().as_secs_f64())
         }
     })
+}
+
+fn method_name<S: serde::Serializer>(m: &Method, s: S) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_str(m.name())
 }
 
 /// The CPU model and the number of cores the process may use, e.g. "AMD EPYC 9B14, 2 cores".
@@ -213,12 +232,13 @@ pub fn utc_date() -> String {
 /// The rows as an aligned text table.
 pub fn table(report: &Report) -> String {
     let mut s = format!(
-        "hexray {} bench, {}, {}\n{:<16} {:<4} {:>9} {:>5} {:>9} {:>11} {:>9} {:>10} {:>9} {:>9}  device\n",
+        "hexray {} bench, {}, {}\n{:<16} {:<4} {:<6} {:>9} {:>5} {:>9} {:>11} {:>9} {:>10} {:>9} {:>9}  device\n",
         report.hexray_version,
         report.machine,
         report.date_utc,
         "scene",
         "be",
+        "method",
         "size",
         "spp",
         "seconds",
@@ -230,12 +250,13 @@ pub fn table(report: &Report) -> String {
     );
     for r in &report.rows {
         s += &format!(
-            "{:<16} {:<4} {:>9} {:>5} {:>9.3} {:>11.3} {:>9.2} {:>10.3} {:>9.3} {:>9.3}  {}\n",
+            "{:<16} {:<4} {:<6} {:>9} {:>5} {:>9.3} {:>11.3} {:>9.2} {:>10.3} {:>9.3} {:>9.3}  {}\n",
             r.scene,
             match r.backend {
                 Which::Cpu => "cpu",
                 Which::Gpu => "gpu",
             },
+            r.method.name(),
             format!("{}x{}", r.width, r.height),
             r.spp,
             r.seconds,

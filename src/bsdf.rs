@@ -61,6 +61,50 @@ pub fn refract(wo: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
     Some((wt.normalize(), eta))
 }
 
+/// Which quantity a path carries (pbrt-v4's `TransportMode`): camera subpaths carry radiance
+/// toward the camera, light subpaths carry importance toward the lights (their throughput is
+/// flux). The BSDFs here are symmetric except refraction, whose radiance scales by 1/η² across
+/// the boundary while flux does not (Veach's thesis, section 5.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    Radiance,
+    Importance,
+}
+
+/// The two-sided Lambertian BSDF evaluated for a pair of directions, as a connection needs it.
+#[derive(Clone, Copy, Debug)]
+pub struct DiffuseEval {
+    /// f = albedo / π where `wo` and `wi` lie on one side of the surface, else 0.
+    pub f: Vec3,
+    /// |cos θi|: the cosine at the surface toward `wi` (0 where f is).
+    pub cos_i: f32,
+    /// Solid-angle density with which sampling from `wo` picks `wi`: cos θi / π.
+    pub pdf: f32,
+    /// The reverse: the density of `wo` when sampling from `wi`, cos θo / π.
+    pub pdf_rev: f32,
+}
+
+/// Evaluates the Lambertian BSDF of albedo `albedo` at a surface whose unit normal `n_facing`
+/// points to the side of `wo`.
+#[inline]
+pub fn eval_diffuse(albedo: Vec3, n_facing: Vec3, wo: Vec3, wi: Vec3) -> DiffuseEval {
+    let cos_i = n_facing.dot(wi);
+    if cos_i <= 0.0 {
+        return DiffuseEval {
+            f: Vec3::ZERO,
+            cos_i: 0.0,
+            pdf: 0.0,
+            pdf_rev: 0.0,
+        };
+    }
+    DiffuseEval {
+        f: albedo * FRAC_1_PI,
+        cos_i,
+        pdf: cos_i * FRAC_1_PI,
+        pdf_rev: n_facing.dot(wo).max(0.0) * FRAC_1_PI,
+    }
+}
+
 /// A sampled direction and what it does to the path.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfSample {
@@ -77,7 +121,13 @@ pub struct BsdfSample {
 /// direction `wo`, from two uniform numbers for the direction and one for the lobe. Diffuse
 /// surfaces are two-sided: they scatter into the hemisphere `wo` lies in.
 #[inline]
-pub fn sample_bsdf(m: &Material, n: Vec3, wo: Vec3, u: [f32; 4]) -> BsdfSample {
+pub fn sample_bsdf(
+    m: &Material,
+    n: Vec3,
+    wo: Vec3,
+    u: [f32; 4],
+    transport: Transport,
+) -> BsdfSample {
     let color = Vec3::from(m.color);
     match m.kind {
         KIND_MIRROR => BsdfSample {
@@ -100,12 +150,16 @@ pub fn sample_bsdf(m: &Material, n: Vec3, wo: Vec3, u: [f32; 4]) -> BsdfSample {
             } else {
                 // F < 1, so refraction exists. Radiance is not conserved across the boundary:
                 // L scales by 1 / etap² when carried from the entered side back to the left
-                // side (pbrt-v4 eq. 9.17, `TransportMode::Radiance`).
+                // side (pbrt-v4 eq. 9.17, `TransportMode::Radiance`); flux (importance
+                // transport, light subpaths) is.
                 let (wi, etap) = refract(wo, n, m.ior).unwrap_or((reflect(wo, n), 1.0));
                 let eta2 = etap * etap;
                 BsdfSample {
                     wi,
-                    weight: color / eta2,
+                    weight: match transport {
+                        Transport::Radiance => color / eta2,
+                        Transport::Importance => color,
+                    },
                     pdf: 0.0,
                     eta2,
                 }
@@ -173,7 +227,7 @@ mod tests {
             ..Default::default()
         };
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let s = sample_bsdf(&m, Vec3::Z, wo, [0.3, 0.7, 0.5, 0.0]);
+        let s = sample_bsdf(&m, Vec3::Z, wo, [0.3, 0.7, 0.5, 0.0], Transport::Radiance);
         assert_eq!(s.weight, Vec3::new(0.9, 0.5, 0.25));
         assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
     }
@@ -188,7 +242,7 @@ mod tests {
         };
         let wo = Vec3::new(0.6, 0.0, 0.8);
         // u[2] = 0.999 > F: refract into the glass.
-        let s = sample_bsdf(&m, Vec3::Z, wo, [0.0, 0.0, 0.999, 0.0]);
+        let s = sample_bsdf(&m, Vec3::Z, wo, [0.0, 0.0, 0.999, 0.0], Transport::Radiance);
         let sin_t = (s.wi.x * s.wi.x + s.wi.y * s.wi.y).sqrt();
         assert!((sin_t * 1.5 - 0.6).abs() < 1e-6 && s.wi.z < 0.0);
         assert!((s.weight.x - 1.0 / 2.25).abs() < 1e-6 && (s.eta2 - 2.25).abs() < 1e-6);
@@ -209,7 +263,7 @@ mod tests {
             let n = 10_000;
             for i in 0..n {
                 let u = crate::sampling::Sampler::new(1, i, 0).draw4(0);
-                let s = sample_bsdf(&m, Vec3::Z, wo, u);
+                let s = sample_bsdf(&m, Vec3::Z, wo, u, Transport::Radiance);
                 assert!(s.wi.z * wo.z > 0.0 && s.pdf > 0.0);
                 acc += s.weight.as_dvec3();
             }

@@ -67,11 +67,22 @@ impl PixelStats {
 }
 
 /// A whole image of pixel statistics, row 0 at the top.
+///
+/// Methods that splat light subpaths into the pixels they are seen in (light tracing, BDPT) make
+/// the pixels of one iteration dependent: one light subpath adds to several pixels. Their
+/// samples are *batch means*: an iteration, which traces one light subpath per pixel and one
+/// camera subpath per pixel, is one independent estimate of the whole image, and each pixel
+/// adds its value of that iteration as one sample, so the per-pixel statistics stay right. The
+/// image mean's standard error cannot then be summed over pixels; it comes from the scatter of
+/// the iterations' own image means, which such methods record in `iteration_means`.
 #[derive(Clone, Debug)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<PixelStats>,
+    /// The image mean of each iteration, one sample per iteration, where pixels share samples
+    /// (`Some` for light tracing and BDPT; `None` where pixels are independent).
+    pub iteration_means: Option<PixelStats>,
 }
 
 impl Film {
@@ -80,6 +91,15 @@ impl Film {
             width,
             height,
             pixels: vec![PixelStats::default(); (width * height) as usize],
+            iteration_means: None,
+        }
+    }
+
+    /// A film for a method whose pixels share samples within an iteration (see the type).
+    pub fn with_iteration_means(width: u32, height: u32) -> Film {
+        Film {
+            iteration_means: Some(PixelStats::default()),
+            ..Film::new(width, height)
         }
     }
 
@@ -108,8 +128,10 @@ impl Film {
             .collect()
     }
 
-    /// The mean over all pixels, and its standard error. Pixels are independent estimates, so
-    /// the variance of their average is the sum of their variances over N².
+    /// The mean over all pixels, and its standard error. Where pixels are independent
+    /// estimates, the variance of their average is the sum of their variances over N²; where
+    /// they share samples (`iteration_means`), it is the variance of the mean of the
+    /// iterations' image means (batch means).
     pub fn image_mean(&self) -> ([f64; 3], [f64; 3]) {
         let n = self.pixels.len() as f64;
         let mut m = [0.0; 3];
@@ -121,7 +143,11 @@ impl Film {
                 v[c] += pv[c];
             }
         }
-        (m.map(|x| x / n), v.map(|x| x.sqrt() / n))
+        let se = match &self.iteration_means {
+            Some(batches) => batches.var_of_mean().map(f64::sqrt),
+            None => v.map(|x| x.sqrt() / n),
+        };
+        (m.map(|x| x / n), se)
     }
 }
 

@@ -3,8 +3,9 @@
 
 use crate::flat::{FlatScene, NOT_AN_EMITTER};
 use crate::geometry::{triangle_normal, triangle_point};
-use crate::sampling::sample_uniform_triangle;
+use crate::sampling::{orthonormal_basis, sample_cosine_hemisphere, sample_uniform_triangle};
 use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
 
 /// A point on an emitter, chosen for next-event estimation.
 #[derive(Clone, Copy, Debug)]
@@ -48,6 +49,36 @@ pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> Lig
         n: triangle_normal(tri),
         le: Vec3::from(scene.materials[tri.material as usize].emission),
         pdf_area: row.pmf / row.area,
+    }
+}
+
+/// Where a light subpath starts (light tracing, BDPT): a point on an emitter and a direction
+/// from its front.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub point: LightSample,
+    /// Unit direction of emission, cosine-distributed about the emitter's normal.
+    pub dir: Vec3,
+    /// cos θ between the normal and `dir` (> 0).
+    pub cos: f32,
+    /// Solid-angle density of `dir`: cos θ / π.
+    pub pdf_dir: f32,
+}
+
+/// Starts a light subpath: an emitter point chosen as [`sample_emitter`] chooses it (so the two
+/// strategies that sample a light point, next-event estimation and light subpaths, share one
+/// area density), then a direction from its front with density cos θ / π, which makes the first
+/// throughput Le cos θ / (p_A · cos θ / π) = π Le / p_A, the same for every direction.
+#[inline]
+pub fn sample_emission(scene: &FlatScene, u_point: [f32; 4], u_dir: [f32; 4]) -> EmissionSample {
+    let point = sample_emitter(scene, u_point[0], u_point[1], u_point[2]);
+    let local = sample_cosine_hemisphere(u_dir[0], u_dir[1]);
+    let (t, b) = orthonormal_basis(point.n);
+    EmissionSample {
+        point,
+        dir: local.x * t + local.y * b + local.z * point.n,
+        cos: local.z,
+        pdf_dir: local.z * FRAC_1_PI,
     }
 }
 

@@ -7,6 +7,7 @@ use hexray::camera::Camera;
 use hexray::film::Film;
 use hexray::flat::FlatScene;
 use hexray::gpu;
+use hexray::method::Method;
 use hexray::output::{self, Metadata, RgbImage};
 use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
 use hexray::scene::Scene;
@@ -88,10 +89,17 @@ struct RenderArgs {
     /// scene fits, else storage buffers).
     #[arg(long, value_enum)]
     scene_residency: Option<ResidencyChoice>,
-    /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS.
+    /// Light-transport method. `light` sees nothing through mirrors or glass (those surfaces
+    /// stay black); `light` and `bdpt` take one iteration (a light subpath and a camera subpath
+    /// per pixel) per sample.
+    #[arg(long, value_enum, default_value_t = Method::Path)]
+    method: Method,
+    /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
+    /// (path tracing only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
     light_samples: u32,
-    /// Samples per pixel. Without --time the default is 64; with --time, no sample limit.
+    /// Samples per pixel (iterations for light and bdpt). Without --time the default is 64;
+    /// with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
     /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
@@ -207,7 +215,11 @@ struct CurveArgs {
     /// Render-time budget per series, in seconds.
     #[arg(long, value_parser = parse_seconds, default_value = "10")]
     time: f64,
-    /// Shadow rays per diffuse vertex; a comma-separated list gives one series per value.
+    /// Methods, comma-separated (path, light, bdpt): one series per backend and method.
+    #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
+    method: Vec<Method>,
+    /// Shadow rays per diffuse vertex (path tracing); a comma-separated list gives one series
+    /// per value.
     #[arg(long, value_delimiter = ',', default_values_t = [1u32])]
     light_samples: Vec<u32>,
     #[arg(long, default_value_t = 1)]
@@ -300,50 +312,69 @@ fn curve(args: &CurveArgs) -> Result<ExitCode> {
     let mut points = Vec::new();
     let mut devices = Vec::new();
     for b in &args.backend {
-        for &n in &args.light_samples {
-            let which = match b {
-                BenchBackend::Cpu => Which::Cpu,
-                BenchBackend::Gpu => Which::Gpu,
+        for &method in &args.method {
+            // Several shadow-ray counts are path tracing's alone.
+            let counts: &[u32] = if method == Method::Path {
+                &args.light_samples
+            } else {
+                &[1]
             };
-            let (mut backend, compile) =
-                make_backend(which, &flat, camera, args.seed, n, threads, gpu.as_ref())?;
-            // The adapter's name without its (type, API, driver) suffix, to fit the caption.
-            let device = backend.device();
-            let short = device
-                .find(") (")
-                .map_or(device.as_str(), |i| &device[..=i]);
-            let entry = format!("{}: {short}", backend.name());
-            if !devices.contains(&entry) {
-                devices.push(entry);
-            }
-            let (mut series, warmup) = hexray::curve::measure(
-                &scene.desc.name,
-                backend.as_mut(),
-                w,
-                h,
-                &reference,
-                args.time,
-                |p| {
-                    eprintln!(
-                        "{} {:>6} spp {:>9.3} s  RMSE {:.4e}  relMSE {:.4e}",
-                        p.backend, p.spp, p.seconds, p.rmse, p.relmse
-                    )
-                },
-            )?;
-            eprintln!(
-                "{}: kernel build {compile:.2} s, warm-up pass {warmup:.2} s (not counted)",
-                backend.name()
-            );
-            if args.light_samples.len() > 1 {
-                for p in &mut series {
-                    p.backend = format!(
-                        "{}, {n} shadow ray{}",
-                        p.backend,
-                        if n == 1 { "" } else { "s" }
-                    );
+            for &n in counts {
+                let which = match b {
+                    BenchBackend::Cpu => Which::Cpu,
+                    BenchBackend::Gpu => Which::Gpu,
+                };
+                let (mut backend, compile) = make_backend(
+                    which,
+                    &flat,
+                    camera,
+                    args.seed,
+                    method,
+                    n,
+                    threads,
+                    gpu.as_ref(),
+                )?;
+                // The adapter's name without its (type, API, driver) suffix, to fit the caption.
+                let device = backend.device();
+                let short = device
+                    .find(") (")
+                    .map_or(device.as_str(), |i| &device[..=i]);
+                let entry = format!("{}: {short}", backend.name());
+                if !devices.contains(&entry) {
+                    devices.push(entry);
                 }
+                let (mut series, warmup) = hexray::curve::measure(
+                    &scene.desc.name,
+                    backend.as_mut(),
+                    w,
+                    h,
+                    &reference,
+                    args.time,
+                    |p| {
+                        eprintln!(
+                            "{} {:>6} spp {:>9.3} s  RMSE {:.4e}  relMSE {:.4e}",
+                            p.backend, p.spp, p.seconds, p.rmse, p.relmse
+                        )
+                    },
+                )?;
+                eprintln!(
+                    "{} {method}: kernel build {compile:.2} s, warm-up pass {warmup:.2} s (not counted)",
+                    backend.name()
+                );
+                for p in &mut series {
+                    if args.method.len() > 1 {
+                        p.backend = format!("{} {method}", p.backend);
+                    }
+                    if args.light_samples.len() > 1 && method == Method::Path {
+                        p.backend = format!(
+                            "{}, {n} shadow ray{}",
+                            p.backend,
+                            if n == 1 { "" } else { "s" }
+                        );
+                    }
+                }
+                points.extend(series);
             }
-            points.extend(series);
         }
     }
     std::fs::create_dir_all(&args.out)
@@ -473,7 +504,10 @@ struct BenchArgs {
     height: u32,
     #[arg(long, default_value_t = 1)]
     seed: u32,
-    /// Shadow rays per diffuse vertex.
+    /// Methods, comma-separated (path, light, bdpt): a row for each on every scene and backend.
+    #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
+    method: Vec<Method>,
+    /// Shadow rays per diffuse vertex (path tracing).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
     light_samples: u32,
     /// CPU threads (default: all cores).
@@ -533,6 +567,7 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
         height: args.height,
         spp: args.spp,
         seed: args.seed,
+        methods: args.method.clone(),
         light_samples: args.light_samples,
         threads: args.threads.map_or_else(
             || std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -541,8 +576,9 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
     };
     let report = bench::run(&config, gpu.as_ref(), |row| {
         eprintln!(
-            "{} on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
+            "{} with {} on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
             row.scene,
+            row.method,
             row.device,
             row.camera_paths_per_second / 1e6,
             row.seconds,
@@ -650,6 +686,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         );
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
+    if args.light_samples > 1 && args.method != Method::Path {
+        eprintln!(
+            "error: --light-samples {} is for --method path; {} takes one light sample per vertex",
+            args.light_samples, args.method
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
     let budget = Budget {
         spp: args
             .spp
@@ -707,6 +750,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         None => {
             let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
             cpu.light_samples = args.light_samples;
+            cpu.method = args.method;
             Box::new(cpu)
         }
         Some(g) => {
@@ -730,6 +774,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 hexray::cpu::Faults::NONE,
                 checks,
                 residency,
+                args.method,
             )?;
             renderer.set_light_samples(args.light_samples);
             if !args.quiet {
@@ -801,6 +846,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     meta.set("spp", report.spp);
     meta.set("seed", args.seed);
     meta.set("light_samples", args.light_samples);
+    meta.set("method", args.method);
     meta.set("backend", backend.name());
     meta.set("device", backend.device());
     meta.set("render_seconds", format!("{:.6}", report.seconds));
@@ -823,8 +869,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             StopReason::Failed(_) => "the backend failed; samples so far kept",
         };
         eprintln!(
-            "rendered {} spp in {:.2} s ({:.3} M camera paths/s; {why}); dropped {} samples",
+            "rendered {} spp with {} in {:.2} s ({:.3} M camera paths/s; {why}); dropped {} samples",
             report.spp,
+            args.method,
             report.seconds,
             paths / report.seconds / 1e6,
             film.dropped()

@@ -103,17 +103,32 @@ pub fn render_progressive(
     }
 }
 
+/// Refuses to add samples of `method` to a film that holds another kind: a film of a splatting
+/// method keeps the iterations' image means (batch means) and one of path tracing does not.
+pub fn check_film_for(method: crate::method::Method, film: &Film) -> anyhow::Result<()> {
+    if film.spp() > 0 && film.iteration_means.is_some() != method.splats() {
+        anyhow::bail!(
+            "this film holds samples of another kind of method than {method}; render into a new film"
+        );
+    }
+    Ok(())
+}
+
 /// The CPU backend as a [`Backend`], on a rayon pool of its own.
 pub struct CpuBackend<'a> {
     pub scene: &'a crate::flat::FlatScene,
     pub camera: crate::camera::Camera,
     pub seed: u32,
     pub faults: crate::cpu::Faults,
-    /// Shadow rays per diffuse vertex (`--light-samples`, default 1).
+    /// Shadow rays per diffuse vertex (`--light-samples`, default 1; path tracing only).
     pub light_samples: u32,
+    /// The light-transport method (`--method`, default path tracing).
+    pub method: crate::method::Method,
     /// Rays traced so far (closest-hit and shadow), for the benchmark.
     pub rays: u64,
     pub pool: rayon::ThreadPool,
+    /// Light tracing and BDPT: the light pass's splats and vertices, made at the first pass.
+    buffers: Option<crate::cpu::LightPassBuffers>,
 }
 
 impl<'a> CpuBackend<'a> {
@@ -132,8 +147,10 @@ impl<'a> CpuBackend<'a> {
             seed,
             faults: crate::cpu::Faults::NONE,
             light_samples: 1,
+            method: crate::method::Method::Path,
             rays: 0,
             pool,
+            buffers: None,
         })
     }
 }
@@ -148,6 +165,20 @@ impl Backend for CpuBackend<'_> {
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
         let light_samples = self.light_samples;
+        let method = self.method;
+        if method.splats() {
+            check_film_for(method, film)?;
+            let buffers = self
+                .buffers
+                .get_or_insert_with(|| crate::cpu::LightPassBuffers::new(film.width, film.height));
+            self.rays += self.pool.install(|| {
+                crate::cpu::render_iterations(
+                    scene, camera, seed, first, count, method, faults, buffers, film,
+                )
+            });
+            return Ok(());
+        }
+        check_film_for(method, film)?;
         self.rays += self.pool.install(|| {
             crate::cpu::render_pass(
                 scene,

@@ -58,6 +58,18 @@ pub fn dim_light_extra(bounce: u32, j: u32) -> u32 {
         .wrapping_add(bounce.wrapping_mul(256))
         .wrapping_add(j)
 }
+/// Light subpaths (light tracing, BDPT) draw from blocks of their own, from 2^30 up, keyed by
+/// the same (seed, index, iteration) as the camera subpath of pixel `index`: so a camera subpath
+/// of BDPT draws exactly the numbers a path-traced sample does, and its light subpath is
+/// independent of it. Block [`DIM_EMISSION`]: emitter choice, point on the emitter (2), unused.
+pub const DIM_EMISSION: u32 = 0x4000_0000;
+/// The direction of emission (2), unused (2).
+pub const DIM_EMISSION_DIR: u32 = 0x4000_0001;
+/// Light subpath bounce `k`: BSDF direction (2), lobe choice, Russian roulette.
+#[inline]
+pub fn dim_light_bounce(bounce: u32) -> u32 {
+    0x4000_0002u32.wrapping_add(bounce)
+}
 /// The most shadow rays per diffuse vertex (`--light-samples`): `j` fits a byte of
 /// [`dim_light_extra`].
 pub const MAX_LIGHT_SAMPLES: u32 = 256;

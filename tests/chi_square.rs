@@ -7,7 +7,7 @@
 //! last two tests plant such a disagreement and show it.
 
 use glam::Vec3;
-use hexray::bsdf::sample_bsdf;
+use hexray::bsdf::{sample_bsdf, Transport};
 use hexray::flat::{FlatScene, Material, KIND_DIFFUSE};
 use hexray::geometry::{intersect_triangle, Ray};
 use hexray::light::sample_emitter;
@@ -130,7 +130,18 @@ fn diffuse_material() -> Material {
 
 fn cosine_p(n: Vec3, wo: Vec3, claimed_pdf: &dyn Fn(Vec3) -> f64) -> f64 {
     let m = diffuse_material();
-    let observed = histogram(|i| Some(sample_bsdf(&m, n, wo, Sampler::new(5, i, 0).draw4(2)).wi));
+    let observed = histogram(|i| {
+        Some(
+            sample_bsdf(
+                &m,
+                n,
+                wo,
+                Sampler::new(5, i, 0).draw4(2),
+                Transport::Radiance,
+            )
+            .wi,
+        )
+    });
     let expected = expected_counts(claimed_pdf, SAMPLES as f64);
     chi_square_p(&observed, &expected, "cosine sampling")
 }

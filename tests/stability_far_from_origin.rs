@@ -47,7 +47,7 @@
 use crate::common::parity::{parity, render_cpu_shared, Parity};
 use crate::common::*;
 use glam::Vec3;
-use hexray::bsdf::sample_bsdf;
+use hexray::bsdf::{sample_bsdf, Transport};
 use hexray::bvh::intersect_closest;
 use hexray::camera::Camera;
 use hexray::cpu::Faults;
@@ -394,7 +394,13 @@ fn self_hits(rel: &str, spawn: Spawn) -> (u64, u64) {
                         spawned += 1;
                         again += leaves_again(&hit, wi) as u64;
                     }
-                    let bs = sample_bsdf(&m, hit.n, -ray.d, s.draw4(dim_bsdf(bounce)));
+                    let bs = sample_bsdf(
+                        &m,
+                        hit.n,
+                        -ray.d,
+                        s.draw4(dim_bsdf(bounce)),
+                        Transport::Radiance,
+                    );
                     spawned += 1;
                     again += leaves_again(&hit, bs.wi) as u64;
                     ray = Ray {

@@ -330,9 +330,8 @@ fn gather(scene: &Scene, flat: &FlatScene, mask: &[Option<usize>]) -> Film {
         })
         .collect();
     Film {
-        width: SIZE,
-        height: SIZE,
         pixels,
+        ..Film::new(SIZE, SIZE)
     }
 }
 

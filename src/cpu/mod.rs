@@ -1,13 +1,20 @@
-//! The CPU reference backend: the path integrator, run with rayon over image tiles.
+//! The CPU reference backend: the integrators, run with rayon over image tiles (path tracing)
+//! or over iterations of a light pass and a camera pass (light tracing, BDPT).
 
+pub mod bdpt;
+pub mod light_path;
 pub mod path;
 
 pub use path::{trace_path, Faults};
 
 use crate::camera::Camera;
-use crate::film::Film;
+use crate::film::{Film, PixelStats};
 use crate::flat::FlatScene;
+use crate::method::Method;
 use crate::sampling::Sampler;
+use crate::splat::Splats;
+use crate::subpath::LightVertex;
+use light_path::{LightPass, LightPassMode};
 use rayon::prelude::*;
 
 /// Tiles are square blocks of this many pixels on a side: big enough to amortise scheduling,
@@ -70,6 +77,141 @@ pub fn render_pass(
             film.pixels[index] = stats;
         }
         rays += tile_rays;
+    }
+    rays
+}
+
+/// Light subpaths per parallel task of the light pass.
+const LIGHT_CHUNK: u32 = 256;
+
+/// What the light pass of one iteration leaves for the camera pass: the splats, and (BDPT) the
+/// light subpaths' stored vertices, subpath i's at `vertices[starts[i]..starts[i + 1]]`.
+/// Kept between iterations so that nothing is allocated per iteration but the chunks' lists.
+pub struct LightPassBuffers {
+    pub splats: Splats,
+    pub vertices: Vec<LightVertex>,
+    pub starts: Vec<u32>,
+}
+
+impl LightPassBuffers {
+    pub fn new(width: u32, height: u32) -> LightPassBuffers {
+        LightPassBuffers {
+            splats: Splats::new(width, height),
+            vertices: Vec::new(),
+            starts: Vec::new(),
+        }
+    }
+}
+
+/// Adds iterations `first..first + count` of light tracing or BDPT to `film`. Each iteration
+/// traces one light subpath per pixel (light pass, splatting into `buffers.splats`), then one
+/// camera subpath per pixel (BDPT only) that connects to the light subpath of the same index;
+/// each pixel's value for the iteration, its camera subpath's radiance plus the splats it
+/// received, is one sample of that pixel, and the iteration's image mean one sample of the
+/// image mean (batch means, `film.rs`). Splat sums do not depend on thread order, so images
+/// are bit-identical for any thread count. Returns the number of rays traced.
+#[allow(clippy::too_many_arguments)]
+pub fn render_iterations(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    first: u32,
+    count: u32,
+    method: Method,
+    faults: Faults,
+    buffers: &mut LightPassBuffers,
+    film: &mut Film,
+) -> u64 {
+    assert!(method.splats(), "{method} does not trace light subpaths");
+    let (w, h) = (film.width, film.height);
+    let n_paths = w * h;
+    let pass = LightPass {
+        scene,
+        camera,
+        n_light_paths: n_paths,
+        mode: match method {
+            Method::Bdpt => LightPassMode::Bidirectional,
+            _ => LightPassMode::LightTracing,
+        },
+        faults,
+    };
+    let mut rays = 0u64;
+    for s in first..first + count {
+        // The light pass: every light subpath, in chunks; the chunks' vertices are joined in
+        // subpath order.
+        let chunks: Vec<(Vec<LightVertex>, Vec<u32>, u64)> = (0..n_paths.div_ceil(LIGHT_CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut vertices = Vec::new();
+                let mut ends = Vec::with_capacity(LIGHT_CHUNK as usize);
+                let mut rays = 0;
+                for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
+                    rays += pass.trace(&Sampler::new(seed, i, s), &buffers.splats, &mut vertices);
+                    ends.push(vertices.len() as u32);
+                }
+                (vertices, ends, rays)
+            })
+            .collect();
+        buffers.vertices.clear();
+        buffers.starts.clear();
+        buffers.starts.push(0);
+        for (vertices, ends, chunk_rays) in chunks {
+            let base = buffers.vertices.len() as u32;
+            buffers.starts.extend(ends.iter().map(|e| base + e));
+            buffers.vertices.extend_from_slice(&vertices);
+            rays += chunk_rays;
+        }
+
+        // The camera pass: each pixel's camera subpath (BDPT), plus its splats.
+        let buffers = &*buffers;
+        let tiles_x = w.div_ceil(TILE);
+        let results: Vec<(Vec<(usize, Option<glam::Vec3>)>, u64)> = (0..tiles_x * h.div_ceil(TILE))
+            .into_par_iter()
+            .map(|t| {
+                let (tx, ty) = (t % tiles_x, t / tiles_x);
+                let mut out = Vec::with_capacity((TILE * TILE) as usize);
+                let mut rays = 0;
+                for y in ty * TILE..((ty + 1) * TILE).min(h) {
+                    for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                        let index = (y * w + x) as usize;
+                        let mut value = glam::Vec3::ZERO;
+                        if method == Method::Bdpt {
+                            let (a, b) = (buffers.starts[index], buffers.starts[index + 1]);
+                            value = bdpt::trace_camera_path(
+                                scene,
+                                camera,
+                                x,
+                                y,
+                                &Sampler::new(seed, index as u32, s),
+                                &buffers.vertices[a as usize..b as usize],
+                                n_paths,
+                                faults,
+                                &mut rays,
+                            );
+                        }
+                        out.push((index, buffers.splats.take(index).map(|splat| value + splat)));
+                    }
+                }
+                (out, rays)
+            })
+            .collect();
+
+        // One sample per pixel, and the iteration's image mean as one sample of the image's.
+        let mut image_sum = glam::DVec3::ZERO;
+        for (tile, tile_rays) in results {
+            for (index, value) in tile {
+                // A splat sum that overflowed is dropped like a non-finite sample.
+                let v = value.unwrap_or(glam::Vec3::NAN);
+                film.pixels[index].add(v);
+                if v.is_finite() {
+                    image_sum += v.as_dvec3();
+                }
+            }
+            rays += tile_rays;
+        }
+        film.iteration_means
+            .get_or_insert_with(PixelStats::default)
+            .add((image_sum / (w as f64 * h as f64)).as_vec3());
     }
     rays
 }

@@ -11,7 +11,7 @@
 //! after them is counted in full. Russian roulette ends paths without bias; there is no
 //! maximum depth.
 
-use crate::bsdf::sample_bsdf;
+use crate::bsdf::{sample_bsdf, Transport};
 use crate::bvh::{intersect_closest, occluded};
 use crate::camera::Camera;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
@@ -41,6 +41,9 @@ pub struct Faults {
     /// of its three channels): a renderer whose indirect light, and so its shadows, lose colour
     /// (false when correct).
     pub grey_indirect: bool,
+    /// Light tracing and BDPT: splats with a camera importance that lacks one cos θ factor,
+    /// 1 / (A_pix cos²θ) (false when correct).
+    pub importance_missing_cos: bool,
 }
 
 impl Faults {
@@ -48,6 +51,7 @@ impl Faults {
         specular_scale: 1.0,
         max_bounces: u32::MAX,
         grey_indirect: false,
+        importance_missing_cos: false,
     };
 }
 
@@ -164,7 +168,7 @@ pub fn trace_path(
         // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
         // the sample's weight f · |cos θi| / pdf.
         let u_bsdf = sampler.draw4(dim_bsdf(bounce));
-        let bs = sample_bsdf(&material, hit.n, wo, u_bsdf);
+        let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
         throughput *= bs.weight;
         if bs.pdf == 0.0 {
             throughput *= faults.specular_scale;

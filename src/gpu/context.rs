@@ -99,11 +99,13 @@ pub fn acquire(wanted: Option<&str>) -> Result<Gpu, GpuError> {
     };
     let info = adapter.get_info();
     let have = adapter.limits();
-    // WebGPU's default limits (8 storage buffers per stage is exactly what the renderer binds),
-    // with buffer sizes as large as the adapter allows, for big scenes and images.
+    // WebGPU's default limits, with buffer sizes as large as the adapter allows, for big
+    // scenes and images, and as many storage buffers per stage as it allows: path tracing binds
+    // 8 (WebGPU's default), light tracing and BDPT 11.
     let limits = wgpu::Limits {
         max_storage_buffer_binding_size: have.max_storage_buffer_binding_size,
         max_buffer_size: have.max_buffer_size,
+        max_storage_buffers_per_shader_stage: have.max_storage_buffers_per_shader_stage,
         ..wgpu::Limits::default()
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -1,6 +1,7 @@
 //! The GPU backend: the whole per-pixel path loop in a WGSL compute shader (`shaders/`),
 //! run through wgpu.
 
+pub mod bidirectional;
 pub mod context;
 pub mod render;
 pub mod shader;

@@ -1,11 +1,13 @@
 //! The GPU backend's work: upload the flattened scene as it is, compile the path-tracing
 //! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
 
+use super::bidirectional::Bidirectional;
 use super::shader::{ArrayLengths, Residency};
 use crate::camera::Camera;
 use crate::cpu::Faults;
 use crate::film::Film;
 use crate::flat::FlatScene;
+use crate::method::Method;
 use anyhow::{anyhow, bail, Context, Result};
 use bytemuck::{Pod, Zeroable};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -14,7 +16,7 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
-/// which tile, and the test-only faults. Seven vec4s.
+/// which tile, the method and its light pass, and the test-only faults. Nine vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Frame {
@@ -31,6 +33,20 @@ pub struct Frame {
     pub light_samples: u32,
     /// `Faults::grey_indirect` as 0 or 1 (test-only).
     pub grey_indirect: u32,
+    /// `METHOD_*` in `shaders/scene.wgsl`: 0 path, 1 light, 2 bdpt.
+    pub method: u32,
+    /// N: light subpaths per iteration (one per pixel).
+    pub n_light_paths: u32,
+    /// The iteration's slot in the pass (its image sum).
+    pub slot: u32,
+    /// Light vertices the pool holds.
+    pub vertex_capacity: u32,
+    /// The light subpaths of a light-pass dispatch: `path_origin..path_origin + path_count`.
+    pub path_origin: u32,
+    pub path_count: u32,
+    /// `Faults::importance_missing_cos` as 0 or 1 (test-only).
+    pub importance_missing_cos: u32,
+    pub pad0: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -65,20 +81,24 @@ pub enum Checks {
     Unchecked,
 }
 
-/// The GPU renderer for one scene, camera and seed.
+/// The GPU renderer for one scene, camera, seed and method.
 pub struct GpuRenderer {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
-    pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
-    frame_buffer: wgpu::Buffer,
-    sums: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    pub(super) device: wgpu::Device,
+    pub(super) queue: wgpu::Queue,
+    /// Path tracing's kernel (None for light tracing and BDPT).
+    pipeline: Option<wgpu::ComputePipeline>,
+    pub(super) bind_group: wgpu::BindGroup,
+    pub(super) frame_buffer: wgpu::Buffer,
+    pub(super) sums: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
     texture: wgpu::Texture,
-    frame: Frame,
+    pub(super) frame: Frame,
+    pub(super) method: Method,
+    /// Light tracing and BDPT: their kernels and buffers.
+    pub(super) bidirectional: Option<Bidirectional>,
     /// The dispatch size, in camera paths, that should take about TARGET_DISPATCH_SECONDS;
     /// measured and updated after every pass.
-    paths_per_dispatch: u64,
+    pub(super) paths_per_dispatch: u64,
     lost: Arc<(AtomicBool, Mutex<String>)>,
 }
 
@@ -153,6 +173,29 @@ impl Residency {
     }
 }
 
+/// A compute pipeline for entry point `entry` of the kernel, over bind groups of `layouts`.
+pub(super) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layouts: &[&wgpu::BindGroupLayout],
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(&pipeline_layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
 /// The bindings of `shaders/scene.wgsl`: the six scene arrays (storage or uniform), the frame
 /// (uniform), the pass sums and the running mean (read-write storage), the output texture.
 fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindGroupLayout {
@@ -202,6 +245,7 @@ impl GpuRenderer {
         faults: Faults,
         checks: Checks,
         residency: Residency,
+        method: Method,
     ) -> Result<GpuRenderer> {
         let (width, height) = (camera.width, camera.height);
         let pixels = (width as u64) * (height as u64);
@@ -232,21 +276,17 @@ impl GpuRenderer {
             },
         };
         let layout = bind_group_layout(device, residency);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("hexray render"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("hexray render"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("render"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let (pipeline, bidirectional) = if method.splats() {
+            let b = Bidirectional::new(device, &module, &layout, method, width, height)?;
+            (None, Some(b))
+        } else {
+            (
+                Some(compute_pipeline(device, &module, &[&layout], "render")),
+                None,
+            )
+        };
         if let Some(e) = pollster::block_on(scope.pop()) {
-            bail!("the GPU rejected the path-tracing kernel: {e}");
+            bail!("the GPU rejected the {method} kernel: {e}");
         }
 
         let frame = Frame {
@@ -261,6 +301,18 @@ impl GpuRenderer {
             specular_scale: faults.specular_scale,
             light_samples: 1,
             grey_indirect: faults.grey_indirect as u32,
+            method: match method {
+                Method::Path => 0,
+                Method::Light => 1,
+                Method::Bdpt => 2,
+            },
+            n_light_paths: width * height,
+            slot: 0,
+            vertex_capacity: bidirectional.as_ref().map_or(0, |b| b.capacity),
+            path_origin: 0,
+            path_count: 0,
+            importance_missing_cos: faults.importance_missing_cos as u32,
+            pad0: 0,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -354,12 +406,14 @@ impl GpuRenderer {
             readback,
             texture,
             frame,
+            method,
+            bidirectional,
             paths_per_dispatch: 1 << 16,
             lost,
         })
     }
 
-    fn check_device(&self) -> Result<()> {
+    pub(super) fn check_device(&self) -> Result<()> {
         if self.lost.0.load(Ordering::SeqCst) {
             bail!("the GPU device was lost ({})", self.lost.1.lock().unwrap());
         }
@@ -377,10 +431,15 @@ impl GpuRenderer {
     /// read back and folded into the f64 film. If the device fails, the film keeps every pass
     /// completed before, and the error says what happened.
     pub fn render(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        crate::render::check_film_for(self.method, film)?;
         let mut done = 0;
         while done < count {
             let n = (count - done).min(MAX_PASS_SPP);
-            self.pass(first + done, n, film)?;
+            if self.method.splats() {
+                self.pass_bidirectional(first + done, n, film)?;
+            } else {
+                self.pass(first + done, n, film)?;
+            }
             done += n;
         }
         Ok(())
@@ -424,7 +483,7 @@ impl GpuRenderer {
                 let mut encoder = self.device.create_command_encoder(&Default::default());
                 {
                     let mut cpass = encoder.begin_compute_pass(&Default::default());
-                    cpass.set_pipeline(&self.pipeline);
+                    cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
                     cpass.set_bind_group(0, &self.bind_group, &[]);
                     cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), band.div_ceil(WORKGROUP), 1);
                 }
@@ -438,6 +497,18 @@ impl GpuRenderer {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
         self.queue.submit([encoder.finish()]);
+        self.fold_sums(film)?;
+
+        // Size the next dispatches from this pass's throughput.
+        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
+        self.paths_per_dispatch =
+            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
+        Ok(())
+    }
+
+    /// Reads the pass's sums back (copied to `readback` by the queued work) and folds them into
+    /// the film in f64.
+    pub(super) fn fold_sums(&self, film: &mut Film) -> Result<()> {
         let bytes = self.read_buffer(&self.readback)?;
         let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
         for (p, s) in film.pixels.iter_mut().zip(&sums) {
@@ -448,16 +519,11 @@ impl GpuRenderer {
             p.n += s.n as u64;
             p.dropped += s.dropped as u64;
         }
-
-        // Size the next dispatches from this pass's throughput.
-        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
-        self.paths_per_dispatch =
-            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
         Ok(())
     }
 
     /// Maps a MAP_READ buffer after the queued work, copies its bytes out, unmaps it.
-    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    pub(super) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let slice = buffer.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {

@@ -21,13 +21,22 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 6] = [
+pub const BODY: [(&str, &str); 12] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
     ("bsdf.wgsl", include_str!("../../shaders/bsdf.wgsl")),
     ("light.wgsl", include_str!("../../shaders/light.wgsl")),
+    ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
+    ("film.wgsl", include_str!("../../shaders/film.wgsl")),
+    ("splat.wgsl", include_str!("../../shaders/splat.wgsl")),
+    ("subpath.wgsl", include_str!("../../shaders/subpath.wgsl")),
     ("path.wgsl", include_str!("../../shaders/path.wgsl")),
+    (
+        "light_path.wgsl",
+        include_str!("../../shaders/light_path.wgsl"),
+    ),
+    ("bdpt.wgsl", include_str!("../../shaders/bdpt.wgsl")),
 ];
 
 /// Every shader file (for tests that check none is left out).

@@ -1,0 +1,115 @@
+// What the bidirectional methods share: `src/subpath.rs`, line for line. The stored light vertex
+// and Georgiev et al.'s recursive MIS quantities (power heuristic, beta = 2, without Russian
+// roulette's survival probabilities; src/subpath.rs says why).
+
+// A vertex of a light subpath on a non-specular surface, stored for the camera subpaths.
+struct LightVertex {
+    p: vec3<f32>,
+    // The largest coordinate of the point's error bound.
+    p_err: f32,
+    // Unit geometric normal, turned to the side the light arrived from.
+    n: vec3<f32>,
+    material: u32,
+    // Unit direction back toward the previous light vertex.
+    wo: vec3<f32>,
+    // Edges from the light point.
+    length: u32,
+    // alpha: Le / p_A times f |cos| / pdf of every scattering since.
+    throughput: vec3<f32>,
+    // The next vertex of the same light subpath in the pool, or NO_VERTEX.
+    next: u32,
+    d_vcm: f32,
+    d_vc: f32,
+    d_vm: f32,
+    pad: u32,
+}
+
+const NO_VERTEX: u32 = 0xffffffffu;
+
+// The light pass's stored vertices (a pool shared by the light subpaths of one wave, each
+// subpath a list through `next`), the order-independent tallies (splat.wgsl), and each pixel's
+// camera-subpath radiance of the iteration, waiting for the resolve pass.
+@group(1) @binding(0) var<storage, read_write> light_vertices: array<LightVertex>;
+@group(1) @binding(1) var<storage, read_write> tallies: array<atomic<u32>>;
+@group(1) @binding(2) var<storage, read_write> camera_radiance: array<vec4<f32>>;
+
+// The exponent of the power heuristic, applied to each density ratio.
+fn mis(x: f32) -> f32 {
+    return x * x;
+}
+
+// Georgiev's recursive quantities of one subpath vertex (`SubpathMis`).
+struct SubpathMis {
+    d_vcm: f32,
+    d_vc: f32,
+    d_vm: f32,
+}
+
+// At the camera: its direction density (the importance W), N light subpaths competing for the
+// pixel through t = 1.
+fn mis_camera(n_light_paths: f32, pdf_camera: f32) -> SubpathMis {
+    return SubpathMis(mis(n_light_paths / pdf_camera), 0.0, 0.0);
+}
+
+// At the light point: its area density, the direction's density and the emitter's cosine.
+fn mis_light(pdf_area: f32, pdf_dir: f32, cos: f32) -> SubpathMis {
+    let emission_pdf = pdf_area * pdf_dir;
+    return SubpathMis(mis(pdf_area / emission_pdf), mis(cos / emission_pdf), 0.0);
+}
+
+// At a hit dist2 (squared) away, |cos| at the surface: solid angle becomes area.
+fn mis_at_hit(m: SubpathMis, dist2: f32, cos: f32) -> SubpathMis {
+    var r = m;
+    r.d_vcm *= mis(dist2);
+    r.d_vcm /= mis(cos);
+    r.d_vc /= mis(cos);
+    return r;
+}
+
+// After sampling a direction at a non-specular vertex: density pdf, cosine cos_out, and the
+// reverse density pdf_rev of the arriving direction.
+fn mis_after_diffuse(m: SubpathMis, cos_out: f32, pdf: f32, pdf_rev: f32) -> SubpathMis {
+    var r = m;
+    r.d_vc = mis(cos_out / pdf) * (m.d_vc * mis(pdf_rev) + m.d_vcm);
+    r.d_vcm = mis(1.0 / pdf);
+    return r;
+}
+
+// After a specular bounce: no connection here; the equal Dirac densities cancel.
+fn mis_after_specular(m: SubpathMis, cos_out: f32) -> SubpathMis {
+    var r = m;
+    r.d_vcm = 0.0;
+    r.d_vc *= mis(cos_out);
+    return r;
+}
+
+// s = 0: the camera subpath finds an emitter.
+fn weight_emission(camera: SubpathMis, pdf_area: f32, pdf_dir: f32) -> f32 {
+    let others = mis(pdf_area) * camera.d_vcm + mis(pdf_area * pdf_dir) * camera.d_vc;
+    return 1.0 / (1.0 + others);
+}
+
+// s = 1: next-event estimation from a camera vertex.
+fn weight_next_event(camera: SubpathMis, pdf_bsdf: f32, pdf_light: f32, pdf_emit: f32, pdf_rev: f32) -> f32 {
+    let w_light = mis(pdf_bsdf / pdf_light);
+    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev));
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// s >= 2, t >= 2: a camera vertex connected to a stored light vertex.
+fn weight_connection(camera: SubpathMis, light: SubpathMis, camera_to_light: f32, camera_rev: f32, light_to_camera: f32, light_rev: f32) -> f32 {
+    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev));
+    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev));
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// t = 1: a light vertex connected to the camera.
+fn weight_to_camera(light: SubpathMis, pdf_camera: f32, n_light_paths: f32, light_rev: f32) -> f32 {
+    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev));
+    return 1.0 / (w_light + 1.0);
+}
+
+// s = 1, t = 1: the light point itself seen by the camera.
+fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f32) -> f32 {
+    return 1.0 / (1.0 + mis(pdf_camera / (n_light_paths * pdf_area)));
+}

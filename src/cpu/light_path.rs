@@ -1,0 +1,262 @@
+//! The light pass of light tracing and BDPT: one light subpath, traced from an emitter, each of
+//! its non-specular vertices (the light point included) connected to the pinhole camera and
+//! splatted into the pixel that sees it (the strategies with t = 1), and, for BDPT, stored for
+//! the camera pass to connect to.
+//!
+//! `shaders/light_path.wgsl` is this function again, with the same names, steps and step
+//! comments.
+//!
+//! Light tracing alone (`--method light`) is this pass with every splat weighted 1: an unbiased
+//! estimate of everything the camera sees on non-specular surfaces, and nothing of what it sees
+//! through a mirror or glass (a light subpath can never be connected to the camera through a
+//! specular bounce; those surfaces stay black). For BDPT the splats carry their MIS weights
+//! against every other strategy (`crate::subpath`).
+//!
+//! The light subpath carries flux (importance transport): it starts with α = Le / p_A at the
+//! light point, and each bounce multiplies it by the adjoint BSDF's f · |cos| / pdf
+//! (`Transport::Importance`: refraction does not scale it by 1/η²). A splat at a vertex y seen
+//! in pixel j adds α · f(y) · W_j · |cos θ_y| / dist² / N: the measurement's importance W_j
+//! times the geometry term to the camera, divided by the N light subpaths of an iteration
+//! (Veach's thesis, section 10.2; pbrt-v4's `ConnectBDPT` with t = 1).
+
+use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
+use crate::bvh::{intersect_closest, occluded};
+use crate::camera::Camera;
+use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
+use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER};
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::light::sample_emission;
+use crate::sampling::{dim_light_bounce, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
+use crate::splat::Splats;
+use crate::subpath::{
+    weight_light_point_to_camera, weight_to_camera, LightVertex, SubpathMis, NO_VERTEX,
+};
+use glam::Vec3;
+
+/// Whether a material scatters diffusely (Lambert): diffuse surfaces, and emitters that also
+/// reflect. Only such vertices can be connected.
+#[inline]
+pub fn is_diffuse(material: &Material) -> bool {
+    material.kind == KIND_DIFFUSE
+        || (material.kind == KIND_EMITTER && Vec3::from(material.color).max_element() > 0.0)
+}
+
+/// What the light pass does with a subpath besides splatting it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightPassMode {
+    /// Light tracing: splats weighted 1, nothing stored.
+    LightTracing,
+    /// BDPT: splats weighted by MIS, diffuse vertices stored.
+    Bidirectional,
+}
+
+/// Everything one light pass shares.
+pub struct LightPass<'a> {
+    pub scene: &'a FlatScene,
+    pub camera: &'a Camera,
+    /// N: light subpaths per iteration (one per pixel).
+    pub n_light_paths: u32,
+    pub mode: LightPassMode,
+    pub faults: Faults,
+}
+
+/// The longest full path (in edges) that the `max_bounces` fault lets through: the camera ray,
+/// that many bounces and the connection.
+#[inline]
+pub fn max_path_edges(faults: &Faults) -> u32 {
+    faults.max_bounces.saturating_add(1)
+}
+
+impl LightPass<'_> {
+    /// The camera's importance for a direction at cos θ to its axis (with the test-only fault
+    /// that drops one cos θ).
+    #[inline]
+    fn importance(&self, cos_theta: f32, importance: f32) -> f32 {
+        if self.faults.importance_missing_cos {
+            importance * cos_theta
+        } else {
+            importance
+        }
+    }
+
+    /// Traces the light subpath of `sampler`: splats its connections to the camera into
+    /// `splats` and, for BDPT, appends its diffuse vertices to `vertices`, in order. Returns
+    /// the number of rays traced.
+    pub fn trace(
+        &self,
+        sampler: &Sampler,
+        splats: &Splats,
+        vertices: &mut Vec<LightVertex>,
+    ) -> u64 {
+        let scene = self.scene;
+        let n_paths = self.n_light_paths as f32;
+        let bidirectional = self.mode == LightPassMode::Bidirectional;
+        let mut rays = 0u64;
+
+        // Step 1 - emission: an emitter point chosen by power, uniformly on its area, and a
+        // cosine-distributed direction from its front.
+        let emission = sample_emission(
+            scene,
+            sampler.draw4(DIM_EMISSION),
+            sampler.draw4(DIM_EMISSION_DIR),
+        );
+        let light = emission.point;
+
+        // Step 2 - the light point seen by the camera (s = 1, t = 1): Le / p_A times the
+        // importance and the geometry term toward the eye, against the camera subpath that
+        // hits the emitter there (s = 0).
+        if let Some(r) = self.camera.raster(light.p) {
+            let cos_l = -light.n.dot(r.dir);
+            if cos_l > 0.0 && 1 <= max_path_edges(&self.faults) {
+                let eye = Vec3::from(self.camera.eye);
+                let origin = offset_ray_origin(light.p, light.p_err, light.n, -r.dir);
+                rays += 1;
+                if !occluded(
+                    scene,
+                    &Ray {
+                        o: origin,
+                        d: eye - origin,
+                    },
+                    1.0,
+                ) {
+                    let importance =
+                        self.importance(r.dir.dot(Vec3::from(self.camera.forward)), r.importance);
+                    let pdf_camera = importance * cos_l / r.dist2;
+                    let w = match self.mode {
+                        LightPassMode::LightTracing => 1.0,
+                        LightPassMode::Bidirectional => {
+                            weight_light_point_to_camera(pdf_camera, n_paths, light.pdf_area)
+                        }
+                    };
+                    let value = light.le / light.pdf_area * (pdf_camera * w / n_paths);
+                    splats.add((r.y * self.camera.width + r.x) as usize, value);
+                }
+            }
+        }
+
+        let mut throughput = light.le * (emission.cos / (light.pdf_area * emission.pdf_dir));
+        // The product of the BSDF weights alone, which Russian roulette looks at (the emitted
+        // radiance over densities in `throughput` is no survival probability).
+        let mut scattered = Vec3::ONE;
+        let mut mis = SubpathMis::light(light.pdf_area, emission.pdf_dir, emission.cos);
+        let mut ray = Ray {
+            o: offset_ray_origin(light.p, light.p_err, light.n, emission.dir),
+            d: emission.dir,
+        };
+        let mut bounce = 0u32;
+
+        loop {
+            // Step 3 - closest hit; the quantities turn the direction's density into an area
+            // density at the hit.
+            rays += 1;
+            let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
+                break;
+            };
+            let material = scene.materials[hit.material as usize];
+            let wo = -ray.d;
+            let cos_o = hit.n.dot(wo);
+            mis.at_hit(hit.t * hit.t, cos_o.abs());
+            let length = bounce + 1;
+            if length >= max_path_edges(&self.faults) {
+                break;
+            }
+
+            let diffuse = is_diffuse(&material);
+            if material.kind == KIND_EMITTER && !diffuse {
+                // A black emitter absorbs.
+                break;
+            }
+            if diffuse {
+                let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
+                let albedo = Vec3::from(material.color);
+
+                // Step 4 - store the vertex for the camera subpaths (BDPT).
+                if bidirectional {
+                    vertices.push(LightVertex {
+                        p: hit.p.into(),
+                        p_err: hit.p_err.max_element(),
+                        n: n_facing.into(),
+                        material: hit.material,
+                        wo: wo.into(),
+                        length,
+                        throughput: throughput.into(),
+                        next: NO_VERTEX,
+                        d_vcm: mis.d_vcm,
+                        d_vc: mis.d_vc,
+                        d_vm: mis.d_vm,
+                        pad: 0,
+                    });
+                }
+
+                // Step 5 - connect to the camera (t = 1): splat α f W |cos| / dist² / N into
+                // the pixel that sees the vertex, if nothing is in between.
+                if let Some(r) = self.camera.raster(hit.p) {
+                    let to_eye = -r.dir;
+                    let bsdf = eval_diffuse(albedo, n_facing, wo, to_eye);
+                    if bsdf.pdf > 0.0 && length + 1 <= max_path_edges(&self.faults) {
+                        let eye = Vec3::from(self.camera.eye);
+                        let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, to_eye);
+                        rays += 1;
+                        if !occluded(
+                            scene,
+                            &Ray {
+                                o: origin,
+                                d: eye - origin,
+                            },
+                            1.0,
+                        ) {
+                            let importance = self.importance(
+                                r.dir.dot(Vec3::from(self.camera.forward)),
+                                r.importance,
+                            );
+                            let pdf_camera = importance * bsdf.cos_i / r.dist2;
+                            let w = match self.mode {
+                                LightPassMode::LightTracing => 1.0,
+                                LightPassMode::Bidirectional => {
+                                    weight_to_camera(&mis, pdf_camera, n_paths, bsdf.pdf_rev)
+                                }
+                            };
+                            let value = throughput * bsdf.f * (pdf_camera * w / n_paths);
+                            splats.add((r.y * self.camera.width + r.x) as usize, value);
+                        }
+                    }
+                }
+            }
+
+            // Step 6 - scattering: sample the adjoint BSDF; the quantities take the new
+            // direction's densities (a specular bounce leaves only its cosine).
+            let u = sampler.draw4(dim_light_bounce(bounce));
+            let bs = sample_bsdf(&material, hit.n, wo, u, Transport::Importance);
+            let cos_out = hit.n.dot(bs.wi).abs();
+            if bs.pdf == 0.0 {
+                scattered *= bs.weight * self.faults.specular_scale;
+                throughput *= bs.weight * self.faults.specular_scale;
+                mis.after_specular(cos_out);
+            } else {
+                scattered *= bs.weight;
+                throughput *= bs.weight;
+                mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * std::f32::consts::FRAC_1_PI);
+            }
+            if scattered.max_element() <= 0.0 {
+                break;
+            }
+            ray = Ray {
+                o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+                d: bs.wi,
+            };
+
+            // Step 7 - Russian roulette, as on camera paths: from bounce RR_START_BOUNCE on,
+            // continue with probability q = min(max(scattered), 0.95) and divide by q.
+            if bounce >= RR_START_BOUNCE {
+                let q = scattered.max_element().min(RR_MAX_SURVIVAL);
+                if u[3] >= q {
+                    break;
+                }
+                scattered /= q;
+                throughput /= q;
+            }
+            bounce += 1;
+        }
+        rays
+    }
+}

@@ -1,0 +1,353 @@
+//! The GPU's light tracing and BDPT: the host side of `shaders/light_path.wgsl`,
+//! `shaders/bdpt.wgsl` and the resolve pass of `shaders/film.wgsl`.
+//!
+//! Each iteration is a sequence of dispatches over the same buffers, as on the CPU
+//! (`cpu::render_iterations`): the light pass traces one light subpath per pixel, splatting its
+//! connections to the camera into order-independent fixed-point tallies and (BDPT) storing its
+//! diffuse vertices in a pool; the camera pass traces one camera subpath per pixel and connects
+//! it to the light subpath of the same index; the resolve pass adds each pixel's camera radiance
+//! and splats as one sample, and the image's sum for the iteration's batch mean.
+//!
+//! The pool holds the vertices of one *wave* of light subpaths (a band of rows of the image):
+//! BDPT runs the light and camera passes wave by wave, so any image fits a pool of bounded size.
+//! Waves are sized from the vertices per subpath measured so far. A wave that asks for more
+//! vertices than the pool holds is not lost: the resolve pass drops that iteration whole, and
+//! the host traces it again in smaller waves, drawing the same random numbers, so the film gets
+//! exactly the iteration it would have had. Light subpaths are therefore never cut short and no
+//! strategy ever leaves the MIS weights for want of storage.
+
+use super::render::{compute_pipeline, Frame, GpuRenderer, MAX_PASS_SPP, WORKGROUP};
+use crate::film::{Film, PixelStats};
+use crate::method::Method;
+use crate::subpath::LightVertex;
+use anyhow::{bail, Result};
+use std::time::Instant;
+
+/// Words of one tally cell (`CELL_WORDS` in `shaders/splat.wgsl`).
+const CELL_WORDS: u64 = 8;
+/// The word of an image cell that holds the light vertices a wave asked for (`CELL_VERTICES`).
+const CELL_VERTICES: usize = 6 + 1;
+/// Light subpaths per workgroup of the light pass (`@workgroup_size(64)`).
+const LIGHT_WORKGROUP: u32 = 64;
+/// Vertices per light subpath assumed before any is measured: a closed room with albedo 0.8
+/// stores about 4, a white furnace of albedo 0.95 about 20.
+const FIRST_VERTICES_PER_PATH: f64 = 8.0;
+
+/// Light tracing's and BDPT's kernels and buffers.
+pub struct Bidirectional {
+    light_pipeline: wgpu::ComputePipeline,
+    /// BDPT only.
+    camera_pipeline: Option<wgpu::ComputePipeline>,
+    resolve_pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    tallies: wgpu::Buffer,
+    tally_readback: wgpu::Buffer,
+    /// Light vertices the pool holds.
+    pub capacity: u32,
+    /// Light vertices per light subpath, as measured (with a margin), for sizing waves.
+    vertices_per_path: f64,
+    /// Iterations traced again after a wave overflowed the pool.
+    pub retraced: u64,
+}
+
+/// Word offsets into the tallies (`shaders/splat.wgsl`) for an image of `pixels` pixels.
+fn image_cells_word(pixels: u64) -> u64 {
+    pixels * CELL_WORDS
+}
+fn vertex_counter_word(pixels: u64) -> u64 {
+    (pixels + MAX_PASS_SPP as u64) * CELL_WORDS
+}
+fn tally_words(pixels: u64) -> u64 {
+    vertex_counter_word(pixels) + 1 + pixels
+}
+
+impl Bidirectional {
+    pub fn new(
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        scene_layout: &wgpu::BindGroupLayout,
+        method: Method,
+        width: u32,
+        height: u32,
+    ) -> Result<Bidirectional> {
+        let pixels = width as u64 * height as u64;
+        let limits = device.limits();
+        let max_binding =
+            (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+        let vertex_size = std::mem::size_of::<LightVertex>() as u64;
+        let tallies_size = 4 * tally_words(pixels);
+        if tallies_size > max_binding || 16 * pixels > max_binding {
+            bail!(
+                "--method {method} at {width}x{height} needs {} MiB of splat tallies in one \
+                 binding, more than this GPU binds ({} MiB); render a smaller image, or use \
+                 --backend cpu",
+                tallies_size >> 20,
+                max_binding >> 20
+            );
+        }
+        // The pool: room for the whole image at the first estimate, within what the device
+        // binds (BDPT only; light tracing stores nothing).
+        let capacity = match method {
+            Method::Bdpt => ((pixels as f64 * FIRST_VERTICES_PER_PATH) as u64)
+                .clamp(1 << 16, max_binding / vertex_size)
+                .min(u32::MAX as u64 - 1) as u32,
+            _ => 1,
+        };
+        let storage = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let vertices = storage("light vertices", capacity as u64 * vertex_size);
+        let tallies = storage("tallies", tallies_size);
+        let camera_radiance = storage("camera radiance", 16 * pixels);
+        let tally_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tally readback"),
+            size: 4 * CELL_WORDS * MAX_PASS_SPP as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("light subpaths"),
+            entries: &[entry(0), entry(1), entry(2)],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("light subpaths"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: vertices.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: tallies.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: camera_radiance.as_entire_binding(),
+                },
+            ],
+        });
+        let layouts = [scene_layout, &layout];
+        Ok(Bidirectional {
+            light_pipeline: compute_pipeline(device, module, &layouts, "light_pass"),
+            camera_pipeline: (method == Method::Bdpt)
+                .then(|| compute_pipeline(device, module, &layouts, "camera_pass")),
+            resolve_pipeline: compute_pipeline(device, module, &layouts, "resolve_pass"),
+            bind_group,
+            tallies,
+            tally_readback,
+            capacity,
+            vertices_per_path: FIRST_VERTICES_PER_PATH,
+            retraced: 0,
+        })
+    }
+}
+
+impl GpuRenderer {
+    /// One pass of light tracing or BDPT: iterations `first..first + count` (at most
+    /// MAX_PASS_SPP), and again those whose waves overflowed the vertex pool, until every one
+    /// has landed in the film.
+    pub(super) fn pass_bidirectional(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+    ) -> Result<()> {
+        let mut pending: Vec<u32> = (first..first + count).collect();
+        while !pending.is_empty() {
+            pending = self.run_iterations(&pending, film)?;
+        }
+        Ok(())
+    }
+
+    /// Writes `frame` to the uniform and runs one dispatch of `pipeline` with it.
+    fn dispatch(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, groups: (u32, u32)) {
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        self.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(frame));
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        {
+            let mut cpass = encoder.begin_compute_pass(&Default::default());
+            cpass.set_pipeline(pipeline);
+            cpass.set_bind_group(0, &self.bind_group, &[]);
+            cpass.set_bind_group(1, &b.bind_group, &[]);
+            cpass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.queue.submit([encoder.finish()]);
+    }
+
+    /// Runs the light pass over subpaths `origin..origin + count`, in dispatches of about
+    /// `paths_per_dispatch`.
+    fn light_dispatches(&self, frame: &Frame, origin: u32, count: u32) {
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        let per = (self
+            .paths_per_dispatch
+            .clamp(LIGHT_WORKGROUP as u64, 65_535 * LIGHT_WORKGROUP as u64)
+            as u32)
+            / LIGHT_WORKGROUP
+            * LIGHT_WORKGROUP;
+        let mut a = 0;
+        while a < count {
+            let n = per.min(count - a);
+            let f = Frame {
+                path_origin: origin + a,
+                path_count: n,
+                ..*frame
+            };
+            self.dispatch(&b.light_pipeline, &f, (n.div_ceil(LIGHT_WORKGROUP), 1));
+            a += n;
+        }
+    }
+
+    /// Runs `pipeline` over rows `y0..y1`, in bands of about `paths_per_dispatch` pixels.
+    fn row_dispatches(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, y0: u32, y1: u32) {
+        let w = frame.camera.width;
+        let rows =
+            ((self.paths_per_dispatch / w as u64).max(1) as u32).div_ceil(WORKGROUP) * WORKGROUP;
+        let mut y = y0;
+        while y < y1 {
+            let band = rows.min(y1 - y);
+            let f = Frame {
+                tile_origin: [0, y],
+                tile_size: [w, band],
+                ..*frame
+            };
+            self.dispatch(
+                pipeline,
+                &f,
+                (w.div_ceil(WORKGROUP), band.div_ceil(WORKGROUP)),
+            );
+            y += band;
+        }
+    }
+
+    /// Traces the given iterations (one slot each) and folds those that landed into the film;
+    /// returns those that a wave overflowed, after enlarging what needs to be enlarged.
+    fn run_iterations(&mut self, iterations: &[u32], film: &mut Film) -> Result<Vec<u32>> {
+        self.check_device()?;
+        let start = Instant::now();
+        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
+        let pixels = w as u64 * h as u64;
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        // Rows per wave: as many as the pool holds at the measured vertices per subpath.
+        let wave_rows = ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h);
+
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.sums, 0, None);
+        encoder.clear_buffer(
+            &b.tallies,
+            4 * image_cells_word(pixels),
+            Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
+        );
+        self.queue.submit([encoder.finish()]);
+        for (slot, &s) in iterations.iter().enumerate() {
+            let frame = Frame {
+                first_sample: s,
+                sample_count: 1,
+                slot: slot as u32,
+                vertex_capacity: b.capacity,
+                ..self.frame
+            };
+            match &b.camera_pipeline {
+                // Light tracing: every light subpath, then the resolve pass.
+                None => self.light_dispatches(&frame, 0, w * h),
+                // BDPT: wave by wave, the light subpaths of a band of rows, then its pixels'
+                // camera subpaths, with the pool's counter cleared before each wave.
+                Some(camera) => {
+                    let mut y = 0;
+                    while y < h {
+                        let y1 = (y + wave_rows).min(h);
+                        let mut encoder = self.device.create_command_encoder(&Default::default());
+                        encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(pixels), Some(4));
+                        self.queue.submit([encoder.finish()]);
+                        self.light_dispatches(&frame, y * w, (y1 - y) * w);
+                        self.row_dispatches(camera, &frame, y, y1);
+                        y = y1;
+                    }
+                }
+            }
+            self.row_dispatches(&b.resolve_pipeline, &frame, 0, h);
+        }
+
+        // Read back the pixel sums and the iterations' image cells.
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+        encoder.copy_buffer_to_buffer(
+            &b.tallies,
+            4 * image_cells_word(pixels),
+            &b.tally_readback,
+            0,
+            Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
+        );
+        self.queue.submit([encoder.finish()]);
+        self.fold_sums(film)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_buffer(&b.tally_readback)?);
+
+        let mut overflowed = Vec::new();
+        let mut most_asked = 0u32;
+        for (slot, &s) in iterations.iter().enumerate() {
+            let cell = &words[slot * CELL_WORDS as usize..(slot + 1) * CELL_WORDS as usize];
+            most_asked = most_asked.max(cell[CELL_VERTICES]);
+            if cell[CELL_VERTICES] > b.capacity {
+                overflowed.push(s);
+                continue;
+            }
+            // The iteration's image mean, one sample of the image mean's batch statistics;
+            // an overflowed sum is dropped like a non-finite sample.
+            let mean = if cell[6] != 0 {
+                glam::Vec3::NAN
+            } else {
+                let sum = |c: usize| {
+                    crate::splat::from_fixed(cell[2 * c] as u64 | (cell[2 * c + 1] as u64) << 32)
+                };
+                glam::Vec3::new(sum(0) as f32, sum(1) as f32, sum(2) as f32) / pixels as f32
+            };
+            film.iteration_means
+                .get_or_insert_with(PixelStats::default)
+                .add(mean);
+        }
+
+        // Size the next waves and dispatches from what this pass measured.
+        let b = self.bidirectional.as_mut().expect("light subpath buffers");
+        if b.camera_pipeline.is_some() {
+            let asked_per_path = most_asked as f64 / (wave_rows as f64 * w as f64);
+            b.vertices_per_path = (1.25 * asked_per_path).max(0.5);
+            if !overflowed.is_empty() {
+                b.retraced += overflowed.len() as u64;
+                if wave_rows == 1 {
+                    bail!(
+                        "BDPT: one row of {w} light subpaths stored {most_asked} vertices, more than \
+                         the GPU's vertex pool holds ({}); render a narrower image, or use \
+                         --backend cpu",
+                        b.capacity
+                    );
+                }
+            }
+        }
+        let landed = (iterations.len() - overflowed.len()) as u64;
+        if landed > 0 {
+            let paths_per_second = (pixels * landed) as f64 / start.elapsed().as_secs_f64();
+            self.paths_per_dispatch = ((paths_per_second * super::render::TARGET_DISPATCH_SECONDS)
+                as u64)
+                .clamp(4096, 1 << 28);
+        }
+        Ok(overflowed)
+    }
+}

@@ -1,0 +1,210 @@
+//! What the bidirectional methods (light tracing, BDPT) share: the stored light vertex, and
+//! multiple importance sampling over connection strategies by recursive quantities, so that no
+//! whole path is ever stored.
+//!
+//! A full path x0 (the pinhole) … xk (on an emitter) can be sampled by several strategies: s of
+//! its vertices from a light subpath and t = k + 1 − s from a camera subpath, joined by one
+//! connection. BDPT takes every strategy that can make the path and weighs each with the
+//! power heuristic (β = 2, Veach's thesis eq. 9.13), w_s = (n_s p_s)² / Σ_i (n_i p_i)², where
+//! p_i is the area-measure density of the whole path under strategy i and n_i the number of
+//! samples strategy i takes per pixel and iteration: N (the number of light subpaths) for t = 1,
+//! whose light subpaths may land in any pixel, and 1 for the others. Strategies that would
+//! connect at a specular vertex cannot make the path and leave the sum.
+//!
+//! The sum is kept as Georgiev et al.'s recursive quantities ("Light transport simulation with
+//! vertex connection and merging", SIGGRAPH Asia 2012, and its technical report, the form of
+//! SmallVCM): at every subpath vertex two numbers, d_vcm and d_vc, from which the partial sum
+//! over all strategies on that subpath's side follows with the one or two densities that only
+//! the connection knows. d_vm (merging) is kept for the photon-merging methods and is 0 here.
+//!
+//! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
+//! emitters weigh alike in both methods), and where one strategy is much better than the others,
+//! which is the rule here (light tracing for caustics seen directly, camera paths for the room
+//! seen in a mirror), it gives the poor ones less weight than the balance heuristic does
+//! (Veach, section 9.2.3).
+//!
+//! The densities are those of the sampling decisions alone, without Russian roulette's survival
+//! probabilities: hexray's roulette depends on the throughput so far, which is not a function of
+//! the path for the reverse direction. Any weights that sum to 1 over the strategies that can
+//! make a path keep the combination unbiased (Veach, eq. 9.4), and these do, so roulette stays
+//! out of them (pbrt-v4's BDPT leaves it out as well).
+
+use bytemuck::{Pod, Zeroable};
+
+/// The exponent of the power heuristic, applied to each density ratio.
+#[inline]
+pub fn mis(x: f32) -> f32 {
+    x * x
+}
+
+/// A vertex of a light subpath, stored for the camera subpaths to connect to (BDPT): only
+/// vertices on non-specular surfaces, which are the only ones a connection can use. Five vec4s,
+/// the same layout in `shaders/subpath.wgsl` (`LightVertex`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct LightVertex {
+    pub p: [f32; 3],
+    /// The largest coordinate of the point's error bound, for spawning the connection ray.
+    pub p_err: f32,
+    /// Unit geometric normal, turned to the side the light arrived from.
+    pub n: [f32; 3],
+    pub material: u32,
+    /// Unit direction back toward the previous vertex of the light subpath.
+    pub wo: [f32; 3],
+    /// Edges from the light point: 1 for the first surface a light subpath hits.
+    pub length: u32,
+    /// α: the emitted radiance over the density of the light point, times f · |cos| / pdf of
+    /// every scattering since, so that α · f · G · W / N is a splat's value.
+    pub throughput: [f32; 3],
+    /// The next vertex of the same light subpath in the GPU's vertex pool, or [`NO_VERTEX`]
+    /// (unused on the CPU, where a subpath's vertices are contiguous).
+    pub next: u32,
+    pub d_vcm: f32,
+    pub d_vc: f32,
+    pub d_vm: f32,
+    pub pad: u32,
+}
+
+/// The end of a light subpath's list of vertices (`LightVertex::next`).
+pub const NO_VERTEX: u32 = u32::MAX;
+
+/// Georgiev's recursive MIS quantities of one subpath vertex (see the module comment). For a
+/// vertex x_j of either subpath, with p→(x_j) the area density with which its own subpath
+/// sampled it:
+/// - d_vcm = 1 / p→(x_j)^β, times N^β on the camera subpath's first vertex (the term of the
+///   strategy that samples x_j from the other side next: light tracing for that vertex);
+/// - d_vc carries, in the same units, the terms of every strategy that samples more of this
+///   subpath's vertices from the other side, built by multiplying density ratios along it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SubpathMis {
+    pub d_vcm: f32,
+    pub d_vc: f32,
+    pub d_vm: f32,
+}
+
+impl SubpathMis {
+    /// At the camera, before the first hit: the camera picked its direction with solid-angle
+    /// density `pdf_camera` (the importance W), and N light subpaths compete for the pixel
+    /// through t = 1. Nothing lies before the camera, so d_vc = 0.
+    #[inline]
+    pub fn camera(n_light_paths: f32, pdf_camera: f32) -> SubpathMis {
+        SubpathMis {
+            d_vcm: mis(n_light_paths / pdf_camera),
+            d_vc: 0.0,
+            d_vm: 0.0,
+        }
+    }
+
+    /// At the light point, before the first hit: the point was picked with area density
+    /// `pdf_area` and the direction with `pdf_dir` (emission density pdf_area · pdf_dir); `cos`
+    /// is the emitter's cosine toward the direction. d_vcm holds the ratio of next-event
+    /// estimation's density of the light point to the emission density (the strategy that
+    /// takes the light point from a camera vertex's light sample), d_vc the one for the camera
+    /// subpath hitting the emitter (its cosine enters, its area density cancels).
+    #[inline]
+    pub fn light(pdf_area: f32, pdf_dir: f32, cos: f32) -> SubpathMis {
+        let emission_pdf = pdf_area * pdf_dir;
+        SubpathMis {
+            d_vcm: mis(pdf_area / emission_pdf),
+            d_vc: mis(cos / emission_pdf),
+            d_vm: 0.0,
+        }
+    }
+
+    /// At a hit `dist2` (squared) from the previous vertex, with |cos θ| between the surface's
+    /// normal and the arriving ray: the solid-angle density of the sampled direction becomes an
+    /// area density, p_A = p_ω |cos θ| / dist².
+    #[inline]
+    pub fn at_hit(&mut self, dist2: f32, cos: f32) {
+        self.d_vcm *= mis(dist2);
+        self.d_vcm /= mis(cos);
+        self.d_vc /= mis(cos);
+    }
+
+    /// After sampling a direction at a non-specular vertex with solid-angle density `pdf` and
+    /// cosine `cos_out` toward it; `pdf_rev` is the density of sampling the arriving direction
+    /// the other way. Every strategy counted so far gains one more ratio; the one that
+    /// connects at this vertex joins the sum (d_vcm before the update).
+    #[inline]
+    pub fn after_diffuse(&mut self, cos_out: f32, pdf: f32, pdf_rev: f32) {
+        self.d_vc = mis(cos_out / pdf) * (self.d_vc * mis(pdf_rev) + self.d_vcm);
+        self.d_vcm = mis(1.0 / pdf);
+    }
+
+    /// After a specular bounce with cosine `cos_out`: no strategy can connect at this vertex
+    /// (d_vcm = 0); its forward and reverse Dirac densities are equal and cancel (for glass the
+    /// Fresnel choice is the same both ways), leaving the cosine.
+    #[inline]
+    pub fn after_specular(&mut self, cos_out: f32) {
+        self.d_vcm = 0.0;
+        self.d_vc *= mis(cos_out);
+    }
+}
+
+/// The weight of a camera subpath finding an emitter (s = 0) at a vertex with these quantities:
+/// the other strategies take the emitter point by next-event estimation (area density
+/// `pdf_area`) or by light subpaths as well (emission density `pdf_area · pdf_dir`, `pdf_dir`
+/// the emitter's density toward the previous vertex).
+#[inline]
+pub fn weight_emission(camera: &SubpathMis, pdf_area: f32, pdf_dir: f32) -> f32 {
+    let others = mis(pdf_area) * camera.d_vcm + mis(pdf_area * pdf_dir) * camera.d_vc;
+    1.0 / (1.0 + others)
+}
+
+/// The weight of next-event estimation (s = 1) from a camera vertex: `pdf_bsdf` is the
+/// vertex's solid-angle density toward the light point and `pdf_light` next-event estimation's
+/// (area density converted to solid angle), `pdf_emit` the light subpath's area density of
+/// the camera vertex (emission toward it), `pdf_rev` the vertex's density toward where its
+/// camera subpath came from.
+#[inline]
+pub fn weight_next_event(
+    camera: &SubpathMis,
+    pdf_bsdf: f32,
+    pdf_light: f32,
+    pdf_emit: f32,
+    pdf_rev: f32,
+) -> f32 {
+    let w_light = mis(pdf_bsdf / pdf_light);
+    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// The weight of connecting a camera vertex to a stored light vertex (s ≥ 2, t ≥ 2).
+/// `camera_to_light` is the area density with which the camera vertex's BSDF would sample the
+/// light vertex, `light_to_camera` the reverse, and each `*_rev` the solid-angle density of
+/// the vertex's BSDF toward its own subpath's previous vertex, given the connection.
+#[inline]
+pub fn weight_connection(
+    camera: &SubpathMis,
+    light: &SubpathMis,
+    camera_to_light: f32,
+    camera_rev: f32,
+    light_to_camera: f32,
+    light_rev: f32,
+) -> f32 {
+    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev));
+    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// The weight of connecting a light vertex to the camera (t = 1): `pdf_camera` is the area
+/// density with which the camera would sample the vertex (W |cos| / dist²), shared by N light
+/// subpaths, and `light_rev` the light vertex's density toward its previous vertex.
+#[inline]
+pub fn weight_to_camera(
+    light: &SubpathMis,
+    pdf_camera: f32,
+    n_light_paths: f32,
+    light_rev: f32,
+) -> f32 {
+    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev));
+    1.0 / (w_light + 1.0)
+}
+
+/// The weight of the light point itself seen by the camera (s = 1, t = 1), against the camera
+/// subpath hitting the emitter there (s = 0): the light point's area density `pdf_area` and the
+/// camera's `pdf_camera`.
+#[inline]
+pub fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f32) -> f32 {
+    1.0 / (1.0 + mis(pdf_camera / (n_light_paths * pdf_area)))
+}
