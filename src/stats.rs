@@ -15,6 +15,9 @@ pub struct MeanImage {
     pub var: Vec<[f64; 3]>,
     /// Samples per pixel (for Welch's degrees of freedom); `f64::INFINITY` when unknown.
     pub n: f64,
+    /// The image mean's standard error where pixels share samples (light tracing, BDPT: the
+    /// batch means of `Film::image_mean`); None where pixels are independent estimates.
+    pub mean_se: Option<[f64; 3]>,
 }
 
 impl MeanImage {
@@ -25,6 +28,7 @@ impl MeanImage {
             mean: film.pixels.iter().map(|p| p.mean()).collect(),
             var: film.pixels.iter().map(|p| p.var_of_mean()).collect(),
             n: film.spp() as f64,
+            mean_se: film.iteration_means.as_ref().map(|_| film.image_mean().1),
         }
     }
 
@@ -56,10 +60,12 @@ impl MeanImage {
             mean,
             var,
             n: self.n * k,
+            mean_se: None,
         }
     }
 
-    /// The mean of all pixels per channel, and its standard error.
+    /// The mean of all pixels per channel, and its standard error (from the batch means where
+    /// pixels share samples).
     pub fn grand_mean(&self) -> ([f64; 3], [f64; 3]) {
         let k = self.mean.len() as f64;
         let mut m = [0.0; 3];
@@ -70,7 +76,7 @@ impl MeanImage {
                 v[c] += pv[c] / (k * k);
             }
         }
-        (m, v.map(f64::sqrt))
+        (m, self.mean_se.unwrap_or(v.map(f64::sqrt)))
     }
 }
 

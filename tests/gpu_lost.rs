@@ -50,6 +50,7 @@ fn a_lost_device_keeps_the_samples_taken_before() {
         Faults::NONE,
         Checks::Unchecked,
         Residency::Storage,
+        hexray::method::Method::Path,
     )
     .unwrap();
     let mut backend = Fragile {

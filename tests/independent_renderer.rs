@@ -29,6 +29,7 @@ fn mitsuba() -> MeanImage {
         mean: mean.pixels.iter().map(|p| p.map(f64::from)).collect(),
         var: var.pixels.iter().map(|p| p.map(f64::from)).collect(),
         n: 8192.0,
+        mean_se: None,
     }
 }
 

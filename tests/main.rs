@@ -21,6 +21,7 @@ mod independent_renderer;
 mod layout;
 mod light_samples;
 mod merge;
+mod mis_weights;
 mod precision;
 mod reintersect;
 mod shaders;

@@ -63,6 +63,7 @@ fn mean_image(mean: &RgbImage, var: &RgbImage, n: f64) -> MeanImage {
         mean: mean.pixels.iter().map(widen).collect(),
         var: var.pixels.iter().map(widen).collect(),
         n,
+        mean_se: None,
     }
 }
 

@@ -5,9 +5,10 @@
 pub mod parity;
 
 use hexray::camera::Camera;
-use hexray::cpu::{render_pass, Faults};
+use hexray::cpu::{render_iterations, render_pass, Faults, LightPassBuffers};
 use hexray::film::Film;
 use hexray::flat::FlatScene;
+use hexray::method::Method;
 use hexray::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -54,9 +55,25 @@ pub fn render_cpu_light_samples(
         height,
         spp,
         seed,
+        Method::Path,
         light_samples,
         faults,
     )
+}
+
+/// [`render_cpu`] with another method: `spp` samples per pixel of path tracing, or `spp`
+/// iterations of light tracing or BDPT.
+pub fn render_cpu_method(
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> Film {
+    let (scene, flat) = load(rel);
+    render_cpu_flat(&scene, &flat, width, height, spp, seed, method, 1, faults)
 }
 
 /// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
@@ -69,21 +86,37 @@ fn render_cpu_flat(
     height: u32,
     spp: u32,
     seed: u32,
+    method: Method,
     light_samples: u32,
     faults: Faults,
 ) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
-    render_pass(
-        flat,
-        &camera,
-        seed,
-        0,
-        spp,
-        light_samples,
-        faults,
-        &mut film,
-    );
+    if method.splats() {
+        let mut buffers = LightPassBuffers::new(width, height);
+        render_iterations(
+            flat,
+            &camera,
+            seed,
+            0,
+            spp,
+            method,
+            faults,
+            &mut buffers,
+            &mut film,
+        );
+    } else {
+        render_pass(
+            flat,
+            &camera,
+            seed,
+            0,
+            spp,
+            light_samples,
+            faults,
+            &mut film,
+        );
+    }
     film
 }
 
@@ -166,8 +199,27 @@ pub fn render_gpu_light_samples(
         height,
         spp,
         seed,
+        Method::Path,
         light_samples,
         faults,
+    )
+}
+
+/// [`render_gpu`] with another method (`spp` iterations of light tracing or BDPT).
+#[allow(clippy::too_many_arguments)]
+pub fn render_gpu_method(
+    gpu: &hexray::gpu::Gpu,
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> Film {
+    let (scene, flat) = load(rel);
+    render_gpu_flat(
+        gpu, &scene, &flat, width, height, spp, seed, method, 1, faults,
     )
 }
 
@@ -181,6 +233,7 @@ fn render_gpu_flat(
     height: u32,
     spp: u32,
     seed: u32,
+    method: Method,
     light_samples: u32,
     faults: Faults,
 ) -> Film {
@@ -194,6 +247,7 @@ fn render_gpu_flat(
         faults,
         hexray::gpu::Checks::Unchecked,
         hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), flat),
+        method,
     )
     .unwrap();
     r.set_light_samples(light_samples);
@@ -223,6 +277,19 @@ pub fn render_cpu_scene(
     seed: u32,
     faults: Faults,
 ) -> Film {
+    render_cpu_scene_method(scene, width, height, spp, seed, Method::Path, faults)
+}
+
+/// [`render_cpu_method`] of a loaded (possibly changed) scene.
+pub fn render_cpu_scene_method(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> Film {
     render_cpu_flat(
         scene,
         &FlatScene::build(scene),
@@ -230,6 +297,7 @@ pub fn render_cpu_scene(
         height,
         spp,
         seed,
+        method,
         1,
         faults,
     )
@@ -245,8 +313,25 @@ pub fn render_gpu_scene(
     seed: u32,
     faults: Faults,
 ) -> Film {
+    render_gpu_scene_method(gpu, scene, width, height, spp, seed, Method::Path, faults)
+}
+
+/// [`render_gpu_method`] of a loaded (possibly changed) scene.
+#[allow(clippy::too_many_arguments)]
+pub fn render_gpu_scene_method(
+    gpu: &hexray::gpu::Gpu,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> Film {
     let flat = FlatScene::build(scene);
-    render_gpu_flat(gpu, scene, &flat, width, height, spp, seed, 1, faults)
+    render_gpu_flat(
+        gpu, scene, &flat, width, height, spp, seed, method, 1, faults,
+    )
 }
 
 /// Pixels (x, y) with any non-zero sample: radiance is never negative, so a pixel whose sum is 0
@@ -350,7 +435,8 @@ fn z_of(mean: f64, exact: f64, var: f64) -> f64 {
 /// Compares a film with exact per-pixel expectations `exact` (row-major, per channel) over the
 /// pixel groups that `group` assigns (None: the pixel is in no group): each group's mean is the
 /// mean of its pixel means, its variance the sum of their variances over the squared count
-/// (pixels are independent estimates). Group-channels with a positive exact value are tested
+/// (pixels are independent estimates; for light tracing and BDPT, whose light subpaths splat
+/// into several pixels, nearly so: tests/standard_error.rs measures how nearly). Group-channels with a positive exact value are tested
 /// with Bonferroni's correction at family level `alpha`; those with exact value 0 must have
 /// taken only zero samples. The image mean is compared too.
 pub fn against_truth(
@@ -423,6 +509,11 @@ pub fn against_truth(
                 rejected += 1;
             }
         }
+    }
+    // Where pixels share samples (light tracing, BDPT), the image mean's variance is that of
+    // the iterations' batch means, not a sum over pixels.
+    if film.iteration_means.is_some() {
+        var = film.image_mean().1.map(|s| s * s);
     }
     TruthReport {
         mean,

@@ -23,6 +23,7 @@ pub fn read(rel: &str) -> MeanImage {
         mean: mean.pixels.iter().map(|p| p.map(f64::from)).collect(),
         var: var.pixels.iter().map(|p| p.map(f64::from)).collect(),
         n: spp,
+        mean_se: None,
     }
 }
 
