@@ -12,6 +12,7 @@
 
 use crate::common::*;
 use hexray::cpu::Faults;
+use hexray::method::Method;
 use std::f64::consts::PI;
 
 fn corner_form_factor(x: f64, y: f64) -> f64 {
@@ -20,21 +21,43 @@ fn corner_form_factor(x: f64, y: f64) -> f64 {
     (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
 }
 
-#[test]
-fn radiance_under_a_square_emitter_matches_the_form_factor() {
+/// The exact image mean, 4 ρ Le F(1, 1) per channel.
+fn truth() -> [f64; 3] {
     let f = 4.0 * corner_form_factor(1.0, 1.0);
     let (albedo, le) = ([0.8, 0.5, 0.2], [1.0, 2.0, 4.0]);
-    let truth = [0, 1, 2].map(|c| albedo[c] * le[c] * f);
-    let film = render_cpu(
-        "scenes/analytic/direct_light.json",
-        8,
-        8,
-        1024,
-        3,
-        Faults::NONE,
-    );
+    [0, 1, 2].map(|c| albedo[c] * le[c] * f)
+}
+
+fn check(film: &hexray::film::Film, what: &str) {
+    let truth = truth();
     let (_, se) = film.image_mean();
     // Resolves a 1 % error.
-    assert!((0..3).all(|c| 4.0 * se[c] < 0.01 * truth[c]), "s.e. {se:?}");
-    assert_mean_within_4_se(&film, truth, "direct light");
+    assert!(
+        (0..3).all(|c| 4.0 * se[c] < 0.01 * truth[c]),
+        "{what}: s.e. {se:?}"
+    );
+    assert_mean_within_4_se(film, truth, what);
+}
+
+const SCENE: &str = "scenes/analytic/direct_light.json";
+
+#[test]
+fn radiance_under_a_square_emitter_matches_the_form_factor() {
+    let film = render_cpu(SCENE, 8, 8, 1024, 3, Faults::NONE);
+    check(&film, "direct light");
+}
+
+/// BDPT takes the same light by next-event estimation, by light subpaths splatted to the
+/// camera and by connections, weighted by MIS; the sum is the form factor again.
+#[test]
+fn bdpt_radiance_under_a_square_emitter_matches_the_form_factor() {
+    let film = render_cpu_method(SCENE, 8, 8, 1024, 4, Method::Bdpt, Faults::NONE);
+    check(&film, "direct light, BDPT");
+}
+
+#[test]
+fn gpu_bdpt_radiance_under_a_square_emitter_matches_the_form_factor() {
+    let Some(gpu) = gpu() else { return };
+    let film = render_gpu_method(gpu, SCENE, 8, 8, 1024, 5, Method::Bdpt, Faults::NONE);
+    check(&film, "GPU direct light, BDPT");
 }

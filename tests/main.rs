@@ -5,6 +5,8 @@
 
 mod bad_input;
 mod bench;
+mod bidirectional_furnace;
+mod bidirectional_parity;
 mod chi_square;
 mod cli;
 mod common;
@@ -20,6 +22,7 @@ mod gpu_random;
 mod independent_renderer;
 mod layout;
 mod light_samples;
+mod light_tracing;
 mod merge;
 mod mis_weights;
 mod precision;

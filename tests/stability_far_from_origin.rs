@@ -171,6 +171,46 @@ fn gpu_room_scaled_by_1e3_renders_the_same_image() {
     assert_gpu_same("scaled_1e3");
 }
 
+/// BDPT far from the origin: the room moved to 1e5 renders, with BDPT, the image the room
+/// renders with path tracing at the origin (the same parity statistic; BDPT's block variances are
+/// checked in tests/standard_error.rs). Its connections and splats spawn rays at both ends of
+/// every edge, and its MIS densities hold squared distances: both must survive the move.
+#[test]
+fn cpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
+    let (rel, seed) = scene("translated_1e5");
+    let moved = render_cpu_method(
+        &rel,
+        SIZE,
+        SIZE,
+        512,
+        seed + 200,
+        hexray::method::Method::Bdpt,
+        Faults::NONE,
+    );
+    let p = parity(&room_reference(), &moved);
+    eprintln!("CPU BDPT translated_1e5 at 512 iterations against the room: {p}");
+    assert!(p.same(), "CPU BDPT at 1e5 differs from the room: {p}");
+}
+
+#[test]
+fn gpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
+    let Some(gpu) = gpu() else { return };
+    let (rel, seed) = scene("translated_1e5");
+    let moved = render_gpu_method(
+        gpu,
+        &rel,
+        SIZE,
+        SIZE,
+        128,
+        seed + 300,
+        hexray::method::Method::Bdpt,
+        Faults::NONE,
+    );
+    let p = parity(&room_reference(), &moved);
+    eprintln!("GPU BDPT translated_1e5 at 128 iterations against the CPU room: {p}");
+    assert!(p.same(), "GPU BDPT at 1e5 differs from the room: {p}");
+}
+
 /// Power: the room translated by 1e5, against the untranslated room rendered with mirrors
 /// (and glass reflections) scaled by 0.97, at the same spp, is rejected.
 #[test]

@@ -381,3 +381,60 @@ fn mirror_corridor_rejects_a_dim_mirror_on_the_gpu() {
     };
     r.assert_rejected_as_too_dark("GPU mirror corridor, mirror 0.97");
 }
+
+// BDPT: the corridor's mirrors are specular, so no light vertex is stored and no connection is
+// possible through them: the image comes from camera subpaths that hit the light (s = 0) and
+// from next-event estimation where a camera vertex is diffuse, weighted by MIS, and must match
+// the same series; a depth cap of 8 must be rejected the same way.
+
+fn bdpt_cpu(faults: Faults) -> TruthReport {
+    compare(&render_cpu_method(
+        SCENE,
+        SIZE,
+        SIZE,
+        SPP,
+        32,
+        hexray::method::Method::Bdpt,
+        faults,
+    ))
+}
+
+fn bdpt_gpu(faults: Faults) -> Option<TruthReport> {
+    let gpu = gpu()?;
+    Some(compare(&render_gpu_method(
+        gpu,
+        SCENE,
+        SIZE,
+        SIZE,
+        SPP,
+        33,
+        hexray::method::Method::Bdpt,
+        faults,
+    )))
+}
+
+#[test]
+fn mirror_corridor_matches_the_series_with_bdpt_on_the_cpu() {
+    bdpt_cpu(Faults::NONE).assert_agrees("CPU BDPT mirror corridor");
+}
+
+#[test]
+fn mirror_corridor_matches_the_series_with_bdpt_on_the_gpu() {
+    let Some(r) = bdpt_gpu(Faults::NONE) else {
+        return;
+    };
+    r.assert_agrees("GPU BDPT mirror corridor");
+}
+
+#[test]
+fn mirror_corridor_rejects_a_depth_cap_with_bdpt_on_the_cpu() {
+    bdpt_cpu(DEPTH_CAP).assert_rejected_as_too_dark("CPU BDPT mirror corridor, depth cap 8");
+}
+
+#[test]
+fn mirror_corridor_rejects_a_depth_cap_with_bdpt_on_the_gpu() {
+    let Some(r) = bdpt_gpu(DEPTH_CAP) else {
+        return;
+    };
+    r.assert_rejected_as_too_dark("GPU BDPT mirror corridor, depth cap 8");
+}

@@ -345,3 +345,46 @@ fn thin_slab_rejects_a_wrong_index_on_the_gpu() {
     };
     r.assert_rejected_as_too_dark("GPU glass slab of index 1.55");
 }
+
+/// BDPT through the thin slab: light subpaths refract through it in importance transport (no
+/// 1/η² scaling) and are never connected at its specular vertices, camera subpaths carry the η²
+/// scaling; the blocks must match the same Fresnel series on both backends.
+#[test]
+fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_cpu() {
+    let r = slab_report(
+        |_| {},
+        |s| {
+            render_cpu_scene_method(
+                s,
+                SIZE,
+                SIZE,
+                SPP,
+                56,
+                hexray::method::Method::Bdpt,
+                Faults::NONE,
+            )
+        },
+    );
+    r.assert_agrees("CPU BDPT thin slab");
+}
+
+#[test]
+fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_gpu() {
+    let Some(gpu) = gpu() else { return };
+    let r = slab_report(
+        |_| {},
+        |s| {
+            render_gpu_scene_method(
+                gpu,
+                s,
+                SIZE,
+                SIZE,
+                SPP,
+                57,
+                hexray::method::Method::Bdpt,
+                Faults::NONE,
+            )
+        },
+    );
+    r.assert_agrees("GPU BDPT thin slab");
+}
