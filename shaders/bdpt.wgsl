@@ -1,20 +1,39 @@
 // The camera pass of bidirectional path tracing: `src/cpu/bdpt.rs` again, with the same names,
-// steps and step comments. One camera subpath per pixel, and at each of its vertices every
-// strategy that ends there: the emitter it hits (s = 0), next-event estimation (s = 1) and a
-// connection to each stored vertex of the pixel's light subpath (s >= 2), each with its MIS
-// weight (subpath.wgsl).
+// steps and step comments. One camera subpath per pixel (n_c where the pixel sees a mirror or
+// glass), and at each of its vertices every strategy that ends there: the emitter it hits
+// (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
+// light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
+// rouletted by its contribution.
 
-// The radiance that the camera subpath of pixel (x, y) gathers by the strategies with t >= 2,
-// connecting to light subpath `path` of the pool.
-fn trace_camera_path(x: u32, y: u32, sampler: Sampler, path: u32) -> vec3<f32> {
+// Whether surface points a and b (points, error bounds, unit normals) see each other, after
+// Russian roulette on the ray by `value`, the contribution it would bring (drawing u): the factor
+// to multiply the contribution by, 1 / q where the ray was traced and found clear, else 0
+// (`CameraPass::visibility`).
+fn visibility(a_p: vec3<f32>, a_err: vec3<f32>, a_n: vec3<f32>, b_p: vec3<f32>, b_err: vec3<f32>, b_n: vec3<f32>, value: vec3<f32>, u: f32) -> f32 {
+    let q = shadow_survival(value, frame.shadow_threshold);
+    if u >= q {
+        return 0.0;
+    }
+    let to_b = b_p - a_p;
+    let origin = offset_ray_origin(a_p, a_err, a_n, to_b);
+    let end = offset_ray_origin(b_p, b_err, b_n, -to_b);
+    if occluded(Ray(origin, end - origin), 1.0) {
+        return 0.0;
+    }
+    return 1.0 / q;
+}
+
+// The radiance that one camera subpath of pixel (x, y) gathers by the strategies with t >= 2,
+// connecting to light subpath `path` of the pool; the pixel traces n_c of them.
+fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> vec3<f32> {
     let n_paths = f32(frame.n_light_paths);
     let max_edges = max_path_edges();
     // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole; its
-    // direction's density is the importance W.
+    // direction's density is the importance W, n_c times over.
     let u_camera = draw4(sampler, DIM_CAMERA);
     var ray = camera_ray(frame.camera, x, y, u_camera.x, u_camera.y);
     let cos_camera = dot(ray.d, frame.camera.forward);
-    var m = mis_camera(n_paths, camera_importance(frame.camera, cos_camera));
+    var m = mis_camera(n_paths, n_c * camera_importance(frame.camera, cos_camera));
 
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
@@ -46,6 +65,7 @@ fn trace_camera_path(x: u32, y: u32, sampler: Sampler, path: u32) -> vec3<f32> {
         }
 
         let u_light = draw4(sampler, dim_light(bounce));
+        let u_bsdf = draw4(sampler, dim_bsdf(bounce));
         let diffuse = is_diffuse(material);
         if material.kind == KIND_EMITTER && !diffuse {
             // A black emitter reflects nothing: the path ends here.
@@ -66,23 +86,22 @@ fn trace_camera_path(x: u32, y: u32, sampler: Sampler, path: u32) -> vec3<f32> {
             let cos_l = -dot(ls.n, wi);
             let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
             if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth + 1u <= max_edges {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                if !occluded(Ray(origin, light_point - origin), 1.0) {
-                    let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                    let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
-                    let w = weight_next_event(m, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
-                    radiance += throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
-                }
+                let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
+                let w = weight_next_event(m, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
+                let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
+                radiance += value * visibility(hit.p, hit.p_err, hit.n, ls.p, ls.p_err, ls.n, value, u_bsdf.w);
             }
 
             // Step 5 - connections (s >= 2): to each vertex of this pixel's light subpath, one
             // shadow ray each; the contribution is beta f_c G f_l alpha, weighted against every
             // other strategy on both sides.
             var k = atomicLoad(&tallies[path_head(path)]);
+            var i = 0u;
             while k != NO_VERTEX {
                 let v = light_vertices[k];
                 k = v.next;
+                i += 1u;
                 if depth + 1u + v.length > max_edges {
                     continue;
                 }
@@ -92,11 +111,6 @@ fn trace_camera_path(x: u32, y: u32, sampler: Sampler, path: u32) -> vec3<f32> {
                 let camera_bsdf = eval_diffuse(albedo, n_facing, wo, dir);
                 let light_bsdf = eval_diffuse(materials[v.material].color, v.n, v.wo, -dir);
                 if camera_bsdf.pdf <= 0.0 || light_bsdf.pdf <= 0.0 || dist2 <= 0.0 {
-                    continue;
-                }
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, dir);
-                let light_point = offset_ray_origin(v.p, vec3<f32>(v.p_err), v.n, -dir);
-                if occluded(Ray(origin, light_point - origin), 1.0) {
                     continue;
                 }
                 let g = camera_bsdf.cos_i * light_bsdf.cos_i / dist2;
@@ -109,13 +123,14 @@ fn trace_camera_path(x: u32, y: u32, sampler: Sampler, path: u32) -> vec3<f32> {
                     light_bsdf.pdf * camera_bsdf.cos_i / dist2,
                     light_bsdf.pdf_rev,
                 );
-                radiance += throughput * camera_bsdf.f * light_bsdf.f * v.throughput * (g * w);
+                let value = throughput * camera_bsdf.f * light_bsdf.f * v.throughput * (g * w);
+                let u = draw4(sampler, dim_connection(bounce, i - 1u))[(i - 1u) % 4u];
+                radiance += value * visibility(hit.p, hit.p_err, hit.n, v.p, vec3<f32>(v.p_err), v.n, value, u);
             }
         }
 
         // Step 6 - scattering: sample the BSDF for the next direction; the throughput takes
         // the sample's weight and the quantities its densities.
-        let u_bsdf = draw4(sampler, dim_bsdf(bounce));
         let bs = sample_bsdf(material, hit.n, wo, u_bsdf, TRANSPORT_RADIANCE);
         let cos_out = abs(dot(hit.n, bs.wi));
         throughput *= bs.weight;
@@ -162,6 +177,13 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     let x = frame.tile_origin.x + gid.x;
     let y = frame.tile_origin.y + gid.y;
     let index = y * frame.camera.width + x;
-    let radiance = trace_camera_path(x, y, Sampler(frame.seed, index, frame.first_sample), index);
-    camera_radiance[index] = vec4<f32>(radiance, 0.0);
+    // The pixel's n_c camera subpaths, averaged; the k-th draws the streams of pixel
+    // index + k N (a camera subpath's own blocks there: light subpaths stop at N).
+    let n_c = camera_radiance[index].w;
+    var radiance = vec3<f32>(0.0);
+    for (var k = 0u; k < u32(n_c); k++) {
+        let sampler = Sampler(frame.seed, index + k * frame.n_light_paths, frame.first_sample);
+        radiance += trace_camera_path(x, y, n_c, sampler, index);
+    }
+    camera_radiance[index] = vec4<f32>(radiance / n_c, n_c);
 }

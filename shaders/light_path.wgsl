@@ -13,13 +13,32 @@ fn max_path_edges() -> u32 {
     return select(frame.max_bounces + 1u, frame.max_bounces, frame.max_bounces == 0xffffffffu);
 }
 
-// The camera's importance for a direction at cos theta to its axis (with the test-only fault
-// that drops one cos theta).
-fn splat_importance(cos_theta: f32, importance: f32) -> f32 {
+// The camera's importance where it sees a point (with the test-only fault that drops one
+// cos theta).
+fn splat_importance(r: Raster) -> f32 {
     if frame.importance_missing_cos != 0u {
-        return importance * cos_theta;
+        return r.importance * dot(r.dir, frame.camera.forward);
     }
-    return importance;
+    return r.importance;
+}
+
+// n_c of pixel `index`, kept in the fourth lane of its camera radiance.
+fn camera_subpaths(index: u32) -> f32 {
+    return camera_radiance[index].w;
+}
+
+// Splats `value` into `pixel` if the surface point p sees the eye, tracing the visibility ray
+// with probability shadow_survival of the value (drawing u) and dividing by it.
+fn splat(pixel: u32, p: vec3<f32>, p_err: vec3<f32>, n: vec3<f32>, value: vec3<f32>, u: f32) {
+    let q = shadow_survival(value, frame.shadow_threshold);
+    if u >= q {
+        return;
+    }
+    let eye = frame.camera.eye;
+    let origin = offset_ray_origin(p, p_err, n, eye - p);
+    if !occluded(Ray(origin, eye - origin), 1.0) {
+        splat_add(splat_cell(pixel), value / q);
+    }
 }
 
 // Appends a vertex to light subpath `path`'s list in the pool, after `last` (NO_VERTEX for the
@@ -57,23 +76,22 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     let light = emission.point;
 
     // Step 2 - the light point seen by the camera (s = 1, t = 1): Le / p_A times the
-    // importance and the geometry term toward the eye, against the camera subpath that
-    // hits the emitter there (s = 0).
+    // importance and the geometry term toward the eye, against the camera subpaths that
+    // hit the emitter there (s = 0).
     let r = camera_raster(camera, light.p);
     if r.seen {
         let cos_l = -dot(light.n, r.dir);
         if cos_l > 0.0 && 1u <= max_path_edges() {
-            let origin = offset_ray_origin(light.p, light.p_err, light.n, -r.dir);
-            if !occluded(Ray(origin, camera.eye - origin), 1.0) {
-                let importance = splat_importance(dot(r.dir, camera.forward), r.importance);
-                let pdf_camera = importance * cos_l / r.dist2;
-                var w = 1.0;
-                if bidirectional {
-                    w = weight_light_point_to_camera(pdf_camera, n_paths, light.pdf_area);
-                }
-                let value = light.le / light.pdf_area * (pdf_camera * w / n_paths);
-                splat_add(splat_cell(r.y * camera.width + r.x), value);
+            let pixel = r.y * camera.width + r.x;
+            // The measurement W |cos| / dist^2, which times n_c is also the camera's density of
+            // the point.
+            let g_camera = splat_importance(r) * cos_l / r.dist2;
+            var w = 1.0;
+            if bidirectional {
+                w = weight_light_point_to_camera(g_camera * camera_subpaths(pixel), n_paths, light.pdf_area);
             }
+            let value = light.le / light.pdf_area * (g_camera * w / n_paths);
+            splat(pixel, light.p, light.p_err, light.n, value, draw4(sampler, DIM_EMISSION).w);
         }
     }
 
@@ -117,23 +135,19 @@ fn trace_light_path(sampler: Sampler, path: u32) {
             }
 
             // Step 5 - connect to the camera (t = 1): splat alpha f W |cos| / dist^2 / N into
-            // the pixel that sees the vertex, if nothing is in between.
+            // the pixel that sees the vertex.
             let rv = camera_raster(camera, hit.p);
             if rv.seen {
-                let to_eye = -rv.dir;
-                let bsdf = eval_diffuse(material.color, n_facing, wo, to_eye);
+                let bsdf = eval_diffuse(material.color, n_facing, wo, -rv.dir);
                 if bsdf.pdf > 0.0 && length + 1u <= max_path_edges() {
-                    let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, to_eye);
-                    if !occluded(Ray(origin, camera.eye - origin), 1.0) {
-                        let importance = splat_importance(dot(rv.dir, camera.forward), rv.importance);
-                        let pdf_camera = importance * bsdf.cos_i / rv.dist2;
-                        var w = 1.0;
-                        if bidirectional {
-                            w = weight_to_camera(m, pdf_camera, n_paths, bsdf.pdf_rev);
-                        }
-                        let value = throughput * bsdf.f * (pdf_camera * w / n_paths);
-                        splat_add(splat_cell(rv.y * camera.width + rv.x), value);
+                    let pixel = rv.y * camera.width + rv.x;
+                    let g_camera = splat_importance(rv) * bsdf.cos_i / rv.dist2;
+                    var w = 1.0;
+                    if bidirectional {
+                        w = weight_to_camera(m, g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
                     }
+                    let value = throughput * bsdf.f * (g_camera * w / n_paths);
+                    splat(pixel, hit.p, hit.p_err, hit.n, value, draw4(sampler, dim_splat(bounce)).x);
                 }
             }
         }

@@ -44,6 +44,17 @@ fn dim_light_bounce(bounce: u32) -> u32 {
     return 0x40000002u + bounce;
 }
 
+// BDPT's Russian roulette on the visibility ray of the connection from camera bounce `bounce`
+// to light vertex `vertex` (lane vertex % 4).
+fn dim_connection(bounce: u32, vertex: u32) -> u32 {
+    return 0x60000000u + (bounce << 14u) + vertex / 4u;
+}
+
+// Light subpath bounce k: Russian roulette on the splat's visibility ray (lane 0).
+fn dim_splat(bounce: u32) -> u32 {
+    return 0x50000000u + bounce;
+}
+
 struct Sampler {
     seed: u32,
     pixel: u32,

@@ -91,7 +91,8 @@ struct Frame {
     path_count: u32,
     // Test-only: splats with an importance that lacks one cos theta (`Faults`), 0 or 1.
     importance_missing_cos: u32,
-    pad0: u32,
+    // tau of BDPT's Russian roulette on visibility rays (0: none).
+    shadow_threshold: f32,
 }
 
 const METHOD_PATH: u32 = 0u;

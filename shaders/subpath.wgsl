@@ -33,6 +33,16 @@ const NO_VERTEX: u32 = 0xffffffffu;
 @group(1) @binding(1) var<storage, read_write> tallies: array<atomic<u32>>;
 @group(1) @binding(2) var<storage, read_write> camera_radiance: array<vec4<f32>>;
 
+// Russian roulette on a visibility ray by the contribution it would bring: traced with
+// probability min(1, max channel / tau) (`shadow_survival`).
+fn shadow_survival(contribution: vec3<f32>, threshold: f32) -> f32 {
+    let c = max_element(contribution);
+    if c >= threshold || threshold <= 0.0 {
+        return 1.0;
+    }
+    return c / threshold;
+}
+
 // The exponent of the power heuristic, applied to each density ratio.
 fn mis(x: f32) -> f32 {
     return x * x;
@@ -45,8 +55,8 @@ struct SubpathMis {
     d_vm: f32,
 }
 
-// At the camera: its direction density (the importance W), N light subpaths competing for the
-// pixel through t = 1.
+// At the camera: its direction density (the importance W, times the pixel's n_c camera
+// subpaths), N light subpaths competing for the pixel through t = 1.
 fn mis_camera(n_light_paths: f32, pdf_camera: f32) -> SubpathMis {
     return SubpathMis(mis(n_light_paths / pdf_camera), 0.0, 0.0);
 }

@@ -170,7 +170,7 @@ impl Backend for CpuBackend<'_> {
             check_film_for(method, film)?;
             let buffers = self
                 .buffers
-                .get_or_insert_with(|| crate::cpu::LightPassBuffers::new(film.width, film.height));
+                .get_or_insert_with(|| crate::cpu::LightPassBuffers::new(scene, camera, method));
             self.rays += self.pool.install(|| {
                 crate::cpu::render_iterations(
                     scene, camera, seed, first, count, method, faults, buffers, film,

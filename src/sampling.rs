@@ -43,7 +43,8 @@ pub const DIM_CAMERA: u32 = 0;
 pub fn dim_light(bounce: u32) -> u32 {
     1 + 2 * bounce
 }
-/// Second block of bounce `k`: BSDF direction (2), lobe choice (reflect or refract), unused.
+/// Second block of bounce `k`: BSDF direction (2), lobe choice (reflect or refract), and for
+/// BDPT the Russian roulette on the next-event ray.
 #[inline]
 pub fn dim_bsdf(bounce: u32) -> u32 {
     2 + 2 * bounce
@@ -61,7 +62,8 @@ pub fn dim_light_extra(bounce: u32, j: u32) -> u32 {
 /// Light subpaths (light tracing, BDPT) draw from blocks of their own, from 2^30 up, keyed by
 /// the same (seed, index, iteration) as the camera subpath of pixel `index`: so a camera subpath
 /// of BDPT draws exactly the numbers a path-traced sample does, and its light subpath is
-/// independent of it. Block [`DIM_EMISSION`]: emitter choice, point on the emitter (2), unused.
+/// independent of it. Block [`DIM_EMISSION`]: emitter choice, point on the emitter (2), Russian
+/// roulette on the light point's splat.
 pub const DIM_EMISSION: u32 = 0x4000_0000;
 /// The direction of emission (2), unused (2).
 pub const DIM_EMISSION_DIR: u32 = 0x4000_0001;
@@ -69,6 +71,21 @@ pub const DIM_EMISSION_DIR: u32 = 0x4000_0001;
 #[inline]
 pub fn dim_light_bounce(bounce: u32) -> u32 {
     0x4000_0002u32.wrapping_add(bounce)
+}
+/// BDPT's Russian roulette on the visibility ray of the connection from camera bounce `bounce`
+/// to light vertex `vertex`: lane `vertex % 4` of this block (blocks from 3 · 2^29 up; distinct
+/// for 2^14 bounces and 2^16 vertices, far beyond any path Russian roulette lets through).
+#[inline]
+pub fn dim_connection(bounce: u32, vertex: u32) -> u32 {
+    0x6000_0000u32
+        .wrapping_add(bounce.wrapping_shl(14))
+        .wrapping_add(vertex / 4)
+}
+/// Light subpath bounce `k`: Russian roulette on the visibility ray of the splat from the vertex
+/// it reaches (lane 0).
+#[inline]
+pub fn dim_splat(bounce: u32) -> u32 {
+    0x5000_0000u32.wrapping_add(bounce)
 }
 /// The most shadow rays per diffuse vertex (`--light-samples`): `j` fits a byte of
 /// [`dim_light_extra`].

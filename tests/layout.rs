@@ -6,6 +6,7 @@ use hexray::camera::Camera;
 use hexray::flat::{BvhNode, Emitter, Material, Sphere, Triangle};
 use hexray::gpu::render::{Frame, PixelSums};
 use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
+use hexray::subpath::LightVertex;
 use std::mem::{offset_of, size_of};
 
 macro_rules! rust_layout {
@@ -98,7 +99,29 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             max_bounces,
             specular_scale,
             light_samples,
-            grey_indirect
+            grey_indirect,
+            method,
+            n_light_paths,
+            slot,
+            vertex_capacity,
+            path_origin,
+            path_count,
+            importance_missing_cos,
+            shadow_threshold
+        }),
+        rust_layout!(LightVertex {
+            p,
+            p_err,
+            n,
+            material,
+            wo,
+            length,
+            throughput,
+            next,
+            d_vcm,
+            d_vc,
+            d_vm,
+            pad
         }),
         rust_layout!(PixelSums {
             sum,

@@ -4,7 +4,8 @@
 //! (Veach's thesis, eq. 9.4: that sum being 1 is what makes the combination unbiased).
 //!
 //! The paths are random walks through the reference scenes (tncg15_room with its mirror wall and
-//! mirror sphere, glass_room with its glass spheres, cornell_box), and through a white furnace
+//! mirror sphere, glass_room with its glass spheres, cornell_box; pixels that see a mirror or
+//! glass trace n_c = 5 camera subpaths per iteration, the others 1), and through a white furnace
 //! (every wall an emitter that also reflects) cut at lengths up to 60 bounces, far longer than
 //! any light subpath the renderer has ever stored. Each strategy's weight is computed by
 //! replaying its two subpaths over the path's vertices with the renderer's own functions
@@ -30,8 +31,8 @@ use hexray::geometry::{offset_ray_origin, Ray};
 use hexray::light::emitter_pdf_area;
 use hexray::sampling::Sampler;
 use hexray::subpath::{
-    weight_connection, weight_emission, weight_light_point_to_camera, weight_next_event,
-    weight_to_camera, SubpathMis,
+    camera_subpaths, weight_connection, weight_emission, weight_light_point_to_camera,
+    weight_next_event, weight_to_camera, SubpathMis,
 };
 use std::f32::consts::FRAC_1_PI;
 
@@ -119,8 +120,14 @@ fn replay(start: SubpathMis, points: &[Vertex], eye: Option<Vec3>, last: usize) 
 }
 
 /// The weights of every strategy that can make the path x0 = eye, x1.. = `path` (whose last
-/// vertex is on an emitter's front), as (s, weight).
-fn strategy_weights(scene: &FlatScene, camera: &Camera, path: &[Vertex]) -> Vec<(usize, f32)> {
+/// vertex is on an emitter's front), as (s, weight); the pixel the path passes traces `n_c`
+/// camera subpaths per iteration.
+fn strategy_weights(
+    scene: &FlatScene,
+    camera: &Camera,
+    path: &[Vertex],
+    n_c: f32,
+) -> Vec<(usize, f32)> {
     let n_paths = (SIZE * SIZE) as f32;
     let eye = Vec3::from(camera.eye);
     let k = path.len();
@@ -142,17 +149,17 @@ fn strategy_weights(scene: &FlatScene, camera: &Camera, path: &[Vertex]) -> Vec<
         let d = (xs[1].p - eye).normalize();
         SubpathMis::camera(
             n_paths,
-            camera.importance(d.dot(Vec3::from(camera.forward))),
+            n_c * camera.importance(d.dot(Vec3::from(camera.forward))),
         )
     };
     let light_start = |toward: Vec3| {
         let cos = cos_to(&ys[0], toward);
         SubpathMis::light(pdf_area, cos * FRAC_1_PI, cos)
     };
-    // The camera's area density of x1.
+    // The camera's area density of x1, n_c subpaths' worth.
     let pdf_camera_x1 = {
         let r = camera.raster(xs[1].p).expect("x1 is in view");
-        r.importance * cos_to(&xs[1], eye) / r.dist2
+        n_c * r.importance * cos_to(&xs[1], eye) / r.dist2
     };
     let mut weights = Vec::new();
 
@@ -231,15 +238,17 @@ fn sums(
 ) -> (usize, usize, bool, f32) {
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
+    let n_c = camera_subpaths(&flat, &camera);
     let (mut paths, mut longest, mut specular, mut worst) = (0, 0, false, 0.0f32);
     for index in 0..walks {
         let walk = walk(&flat, &camera, index, length);
+        let n_c = n_c[(index % (SIZE * SIZE)) as usize] as f32;
         for end in 1..=walk.len() {
             let path = &walk[..end];
             if path[end - 1].emitter.is_none() {
                 continue;
             }
-            let total: f32 = strategy_weights(&flat, &camera, path)
+            let total: f32 = strategy_weights(&flat, &camera, path, n_c)
                 .iter()
                 .filter(|(s, _)| Some(*s) != left_out)
                 .map(|(_, w)| w)

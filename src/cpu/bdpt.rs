@@ -1,15 +1,18 @@
 //! The camera pass of bidirectional path tracing (Veach's thesis, ch. 10): one camera subpath
-//! per pixel, and at each of its vertices every strategy that ends there: the emitter it hits
-//! (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the light
-//! subpath traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the
-//! light pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
+//! per pixel (n_c of them where the pixel sees a mirror or glass, `subpath::camera_subpaths`),
+//! and at each of its vertices every strategy that ends there: the emitter it hits (s = 0),
+//! next-event estimation (s = 1) and a connection to each stored vertex of the light subpath
+//! traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light
+//! pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
 //! strategy that can make its path (`crate::subpath`), so the sum over strategies is unbiased.
+//! The visibility rays of next-event estimation and of the connections are rouletted by their
+//! contribution (`subpath::shadow_survival`).
 //!
 //! `shaders/bdpt.wgsl` is this function again, with the same names, steps and step comments.
 //!
 //! Light subpaths are stored whole, however long: on the CPU as a slice per subpath, on the GPU
-//! in a pool that grows when an iteration overflows it (the iteration is then traced again). No
-//! strategy is ever missing from the weights for want of storage.
+//! in a pool that a wave of subpaths may overflow (the iteration is then traced again in smaller
+//! waves). No strategy is ever missing from the weights for want of storage.
 
 use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
 use crate::bvh::{intersect_closest, occluded};
@@ -19,186 +22,220 @@ use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::sampling::{dim_bsdf, dim_light, Sampler, DIM_CAMERA};
+use crate::sampling::{dim_bsdf, dim_connection, dim_light, Sampler, DIM_CAMERA};
 use crate::subpath::{
-    weight_connection, weight_emission, weight_next_event, LightVertex, SubpathMis,
+    shadow_survival, weight_connection, weight_emission, weight_next_event, LightVertex, SubpathMis,
 };
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
-/// The radiance that the camera subpath of pixel (x, y) gathers by the strategies with t ≥ 2,
-/// connecting to `light_path`, the light subpath of the same pixel and iteration, of N light
-/// subpaths in all. `rays` counts the rays traced.
-#[allow(clippy::too_many_arguments)]
-pub fn trace_camera_path(
-    scene: &FlatScene,
-    camera: &Camera,
-    x: u32,
-    y: u32,
-    sampler: &Sampler,
-    light_path: &[LightVertex],
-    n_light_paths: u32,
-    faults: Faults,
-    rays: &mut u64,
-) -> Vec3 {
-    let n_paths = n_light_paths as f32;
-    let max_edges = max_path_edges(&faults);
-    // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole; its
-    // direction's density is the importance W.
-    let u_camera = sampler.draw4(DIM_CAMERA);
-    let mut ray = camera.ray(x, y, u_camera[0], u_camera[1]);
-    let cos_camera = ray.d.dot(Vec3::from(camera.forward));
-    let mut mis = SubpathMis::camera(n_paths, camera.importance(cos_camera));
+/// Everything one camera pass shares.
+pub struct CameraPass<'a> {
+    pub scene: &'a FlatScene,
+    pub camera: &'a Camera,
+    /// N: light subpaths per iteration (one per pixel).
+    pub n_light_paths: u32,
+    pub faults: Faults,
+    /// τ of the Russian roulette on visibility rays (`subpath::shadow_threshold`).
+    pub shadow_threshold: f32,
+}
 
-    let mut radiance = Vec3::ZERO;
-    let mut throughput = Vec3::ONE;
-    // Product of etap² over refractions, for Russian roulette (as in path.rs).
-    let mut eta_scale = 1.0f32;
-    let mut bounce = 0u32;
-
-    loop {
-        // Step 2 - closest hit; the quantities turn the direction's density into an area
-        // density at the hit.
+impl CameraPass<'_> {
+    /// Whether surface points `a` and `b` (error bounds, unit normals) see each other, after
+    /// Russian roulette on the ray by `value`, the contribution it would bring (drawing `u`):
+    /// the factor to multiply the contribution by, 1 / q where the ray was traced and found
+    /// clear, else 0.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn visibility(
+        &self,
+        a: (Vec3, Vec3, Vec3),
+        b: (Vec3, Vec3, Vec3),
+        value: Vec3,
+        u: f32,
+        rays: &mut u64,
+    ) -> f32 {
+        let q = shadow_survival(value, self.shadow_threshold);
+        if u >= q {
+            return 0.0;
+        }
+        let to_b = b.0 - a.0;
+        let origin = offset_ray_origin(a.0, a.1, a.2, to_b);
+        let end = offset_ray_origin(b.0, b.1, b.2, -to_b);
         *rays += 1;
-        let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
-            break;
-        };
-        let material = scene.materials[hit.material as usize];
-        let wo = -ray.d;
-        let cos_o = hit.n.dot(wo);
-        mis.at_hit(hit.t * hit.t, cos_o.abs());
-        // Edges of the camera subpath up to this vertex.
-        let depth = bounce + 1;
-
-        // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
-        // light point taken by next-event estimation or by a light subpath.
-        if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
-            let pdf_area = emitter_pdf_area(scene, hit.prim);
-            let w = weight_emission(&mis, pdf_area, cos_o * FRAC_1_PI);
-            radiance += throughput * Vec3::from(material.emission) * w;
+        if occluded(
+            self.scene,
+            &Ray {
+                o: origin,
+                d: end - origin,
+            },
+            1.0,
+        ) {
+            0.0
+        } else {
+            1.0 / q
         }
+    }
 
-        let u_light = sampler.draw4(dim_light(bounce));
-        let diffuse = is_diffuse(&material);
-        if material.kind == KIND_EMITTER && !diffuse {
-            // A black emitter reflects nothing: the path ends here.
-            break;
-        }
-        if diffuse {
-            let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
-            let albedo = Vec3::from(material.color);
-            let pdf_rev = cos_o.abs() * FRAC_1_PI;
+    /// The radiance that one camera subpath of pixel (x, y) gathers by the strategies with
+    /// t ≥ 2, connecting to `light_path`, the light subpath of the same pixel and iteration;
+    /// the pixel traces `camera_subpaths` (n_c) of them. `rays` counts the rays traced.
+    pub fn trace(
+        &self,
+        x: u32,
+        y: u32,
+        camera_subpaths: u32,
+        sampler: &Sampler,
+        light_path: &[LightVertex],
+        rays: &mut u64,
+    ) -> Vec3 {
+        let (scene, camera, faults) = (self.scene, self.camera, self.faults);
+        let n_paths = self.n_light_paths as f32;
+        let max_edges = max_path_edges(&faults);
+        // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole;
+        // its direction's density is the importance W, n_c times over.
+        let u_camera = sampler.draw4(DIM_CAMERA);
+        let mut ray = camera.ray(x, y, u_camera[0], u_camera[1]);
+        let cos_camera = ray.d.dot(Vec3::from(camera.forward));
+        let mut mis = SubpathMis::camera(
+            n_paths,
+            camera_subpaths as f32 * camera.importance(cos_camera),
+        );
 
-            // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
-            // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
-            // and against the light subpath that would start there (s = 2).
-            let ls = sample_emitter(scene, u_light[0], u_light[1], u_light[2]);
-            let to_light = ls.p - hit.p;
-            let dist2 = to_light.length_squared();
-            let wi = to_light / dist2.sqrt();
-            let cos_l = -ls.n.dot(wi);
-            let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-            if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth + 1 <= max_edges {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                *rays += 1;
-                if !occluded(
-                    scene,
-                    &Ray {
-                        o: origin,
-                        d: light_point - origin,
-                    },
-                    1.0,
-                ) {
+        let mut radiance = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        // Product of etap² over refractions, for Russian roulette (as in path.rs).
+        let mut eta_scale = 1.0f32;
+        let mut bounce = 0u32;
+
+        loop {
+            // Step 2 - closest hit; the quantities turn the direction's density into an area
+            // density at the hit.
+            *rays += 1;
+            let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
+                break;
+            };
+            let material = scene.materials[hit.material as usize];
+            let wo = -ray.d;
+            let cos_o = hit.n.dot(wo);
+            mis.at_hit(hit.t * hit.t, cos_o.abs());
+            // Edges of the camera subpath up to this vertex.
+            let depth = bounce + 1;
+
+            // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
+            // light point taken by next-event estimation or by a light subpath.
+            if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
+                let pdf_area = emitter_pdf_area(scene, hit.prim);
+                let w = weight_emission(&mis, pdf_area, cos_o * FRAC_1_PI);
+                radiance += throughput * Vec3::from(material.emission) * w;
+            }
+
+            let u_light = sampler.draw4(dim_light(bounce));
+            let u_bsdf = sampler.draw4(dim_bsdf(bounce));
+            let diffuse = is_diffuse(&material);
+            if material.kind == KIND_EMITTER && !diffuse {
+                // A black emitter reflects nothing: the path ends here.
+                break;
+            }
+            if diffuse {
+                let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
+                let albedo = Vec3::from(material.color);
+                let pdf_rev = cos_o.abs() * FRAC_1_PI;
+                let here = (hit.p, hit.p_err, hit.n);
+
+                // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
+                // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
+                // and against the light subpath that would start there (s = 2).
+                let ls = sample_emitter(scene, u_light[0], u_light[1], u_light[2]);
+                let to_light = ls.p - hit.p;
+                let dist2 = to_light.length_squared();
+                let wi = to_light / dist2.sqrt();
+                let cos_l = -ls.n.dot(wi);
+                let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
+                if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth + 1 <= max_edges {
                     let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                     let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
                     let w = weight_next_event(&mis, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
-                    radiance += throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
+                    let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
+                    let light = (ls.p, ls.p_err, ls.n);
+                    radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
+                }
+
+                // Step 5 - connections (s ≥ 2): to each vertex of this pixel's light subpath,
+                // one shadow ray each; the contribution is β f_c G f_l α, weighted against
+                // every other strategy on both sides.
+                for (i, v) in light_path.iter().enumerate() {
+                    if depth + 1 + v.length > max_edges {
+                        continue;
+                    }
+                    let lp = Vec3::from(v.p);
+                    let to_light = lp - hit.p;
+                    let dist2 = to_light.length_squared();
+                    let dir = to_light / dist2.sqrt();
+                    let camera_bsdf = eval_diffuse(albedo, n_facing, wo, dir);
+                    let light_albedo = Vec3::from(scene.materials[v.material as usize].color);
+                    let light_bsdf =
+                        eval_diffuse(light_albedo, Vec3::from(v.n), Vec3::from(v.wo), -dir);
+                    if camera_bsdf.pdf <= 0.0 || light_bsdf.pdf <= 0.0 || dist2 <= 0.0 {
+                        continue;
+                    }
+                    let g = camera_bsdf.cos_i * light_bsdf.cos_i / dist2;
+                    let light_mis = SubpathMis {
+                        d_vcm: v.d_vcm,
+                        d_vc: v.d_vc,
+                        d_vm: v.d_vm,
+                    };
+                    let w = weight_connection(
+                        &mis,
+                        &light_mis,
+                        camera_bsdf.pdf * light_bsdf.cos_i / dist2,
+                        camera_bsdf.pdf_rev,
+                        light_bsdf.pdf * camera_bsdf.cos_i / dist2,
+                        light_bsdf.pdf_rev,
+                    );
+                    let value = throughput
+                        * camera_bsdf.f
+                        * light_bsdf.f
+                        * Vec3::from(v.throughput)
+                        * (g * w);
+                    let there = (lp, Vec3::splat(v.p_err), Vec3::from(v.n));
+                    let u = sampler.draw4(dim_connection(bounce, i as u32))[i % 4];
+                    radiance += value * self.visibility(here, there, value, u, rays);
                 }
             }
 
-            // Step 5 - connections (s ≥ 2): to each vertex of this pixel's light subpath, one
-            // shadow ray each; the contribution is β f_c G f_l α, weighted against every other
-            // strategy on both sides.
-            for v in light_path {
-                if depth + 1 + v.length > max_edges {
-                    continue;
-                }
-                let lp = Vec3::from(v.p);
-                let to_light = lp - hit.p;
-                let dist2 = to_light.length_squared();
-                let dir = to_light / dist2.sqrt();
-                let camera_bsdf = eval_diffuse(albedo, n_facing, wo, dir);
-                let light_albedo = Vec3::from(scene.materials[v.material as usize].color);
-                let light_bsdf =
-                    eval_diffuse(light_albedo, Vec3::from(v.n), Vec3::from(v.wo), -dir);
-                if camera_bsdf.pdf <= 0.0 || light_bsdf.pdf <= 0.0 || dist2 <= 0.0 {
-                    continue;
-                }
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, dir);
-                let light_point =
-                    offset_ray_origin(lp, Vec3::splat(v.p_err), Vec3::from(v.n), -dir);
-                *rays += 1;
-                if occluded(
-                    scene,
-                    &Ray {
-                        o: origin,
-                        d: light_point - origin,
-                    },
-                    1.0,
-                ) {
-                    continue;
-                }
-                let g = camera_bsdf.cos_i * light_bsdf.cos_i / dist2;
-                let light_mis = SubpathMis {
-                    d_vcm: v.d_vcm,
-                    d_vc: v.d_vc,
-                    d_vm: v.d_vm,
-                };
-                let w = weight_connection(
-                    &mis,
-                    &light_mis,
-                    camera_bsdf.pdf * light_bsdf.cos_i / dist2,
-                    camera_bsdf.pdf_rev,
-                    light_bsdf.pdf * camera_bsdf.cos_i / dist2,
-                    light_bsdf.pdf_rev,
-                );
-                radiance +=
-                    throughput * camera_bsdf.f * light_bsdf.f * Vec3::from(v.throughput) * (g * w);
+            // Step 6 - scattering: sample the BSDF for the next direction; the throughput takes
+            // the sample's weight and the quantities its densities.
+            let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
+            let cos_out = hit.n.dot(bs.wi).abs();
+            throughput *= bs.weight;
+            if bs.pdf == 0.0 {
+                throughput *= faults.specular_scale;
+                mis.after_specular(cos_out);
+            } else {
+                mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * FRAC_1_PI);
             }
-        }
-
-        // Step 6 - scattering: sample the BSDF for the next direction; the throughput takes
-        // the sample's weight and the quantities its densities.
-        let u_bsdf = sampler.draw4(dim_bsdf(bounce));
-        let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
-        let cos_out = hit.n.dot(bs.wi).abs();
-        throughput *= bs.weight;
-        if bs.pdf == 0.0 {
-            throughput *= faults.specular_scale;
-            mis.after_specular(cos_out);
-        } else {
-            mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * FRAC_1_PI);
-        }
-        eta_scale *= bs.eta2;
-        if throughput.max_element() <= 0.0 || depth >= max_edges {
-            break;
-        }
-        ray = Ray {
-            o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
-            d: bs.wi,
-        };
-
-        // Step 7 - Russian roulette, as in path.rs: from bounce RR_START_BOUNCE on, continue
-        // with probability q = min(max(throughput) · eta_scale, 0.95) and divide by q.
-        if bounce >= RR_START_BOUNCE {
-            let q = (throughput.max_element() * eta_scale).min(RR_MAX_SURVIVAL);
-            if u_light[3] >= q {
+            eta_scale *= bs.eta2;
+            if throughput.max_element() <= 0.0 || depth >= max_edges {
                 break;
             }
-            throughput /= q;
+            ray = Ray {
+                o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+                d: bs.wi,
+            };
+
+            // Step 7 - Russian roulette, as in path.rs: from bounce RR_START_BOUNCE on,
+            // continue with probability q = min(max(throughput) · eta_scale, 0.95) and divide
+            // by q.
+            if bounce >= RR_START_BOUNCE {
+                let q = (throughput.max_element() * eta_scale).min(RR_MAX_SURVIVAL);
+                if u_light[3] >= q {
+                    break;
+                }
+                throughput /= q;
+            }
+            bounce += 1;
         }
-        bounce += 1;
+        radiance
     }
-    radiance
 }

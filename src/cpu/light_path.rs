@@ -21,15 +21,16 @@
 
 use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
 use crate::bvh::{intersect_closest, occluded};
-use crate::camera::Camera;
+use crate::camera::{Camera, Raster};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
-use crate::sampling::{dim_light_bounce, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
+use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
-    weight_light_point_to_camera, weight_to_camera, LightVertex, SubpathMis, NO_VERTEX,
+    shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex, SubpathMis,
+    NO_VERTEX,
 };
 use glam::Vec3;
 
@@ -58,6 +59,10 @@ pub struct LightPass<'a> {
     pub n_light_paths: u32,
     pub mode: LightPassMode,
     pub faults: Faults,
+    /// n_c per pixel (`subpath::camera_subpaths`; BDPT's MIS weights of the splats).
+    pub camera_subpaths: &'a [u32],
+    /// τ of the Russian roulette on the splats' visibility rays (BDPT; 0 for light tracing).
+    pub shadow_threshold: f32,
 }
 
 /// The longest full path (in edges) that the `max_bounces` fault lets through: the camera ray,
@@ -68,15 +73,49 @@ pub fn max_path_edges(faults: &Faults) -> u32 {
 }
 
 impl LightPass<'_> {
-    /// The camera's importance for a direction at cos θ to its axis (with the test-only fault
-    /// that drops one cos θ).
+    /// The camera's importance where it sees a point (with the test-only fault that drops one
+    /// cos θ).
     #[inline]
-    fn importance(&self, cos_theta: f32, importance: f32) -> f32 {
+    fn importance(&self, r: &Raster) -> f32 {
         if self.faults.importance_missing_cos {
-            importance * cos_theta
+            r.importance * r.dir.dot(Vec3::from(self.camera.forward))
         } else {
-            importance
+            r.importance
         }
+    }
+
+    /// Splats `value` into `pixel` if the surface point `p` (error bound `p_err`, normal `n`)
+    /// sees the eye, tracing the visibility ray with probability `shadow_survival` of the
+    /// value (drawing `u`) and dividing by it. Returns the rays traced.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn splat(
+        &self,
+        splats: &Splats,
+        pixel: usize,
+        p: Vec3,
+        p_err: Vec3,
+        n: Vec3,
+        value: Vec3,
+        u: f32,
+    ) -> u64 {
+        let q = shadow_survival(value, self.shadow_threshold);
+        if u >= q {
+            return 0;
+        }
+        let eye = Vec3::from(self.camera.eye);
+        let origin = offset_ray_origin(p, p_err, n, eye - p);
+        if !occluded(
+            self.scene,
+            &Ray {
+                o: origin,
+                d: eye - origin,
+            },
+            1.0,
+        ) {
+            splats.add(pixel, value / q);
+        }
+        1
     }
 
     /// Traces the light subpath of `sampler`: splats its connections to the camera into
@@ -103,34 +142,26 @@ impl LightPass<'_> {
         let light = emission.point;
 
         // Step 2 - the light point seen by the camera (s = 1, t = 1): Le / p_A times the
-        // importance and the geometry term toward the eye, against the camera subpath that
-        // hits the emitter there (s = 0).
+        // importance and the geometry term toward the eye, against the camera subpaths that
+        // hit the emitter there (s = 0).
         if let Some(r) = self.camera.raster(light.p) {
             let cos_l = -light.n.dot(r.dir);
             if cos_l > 0.0 && 1 <= max_path_edges(&self.faults) {
-                let eye = Vec3::from(self.camera.eye);
-                let origin = offset_ray_origin(light.p, light.p_err, light.n, -r.dir);
-                rays += 1;
-                if !occluded(
-                    scene,
-                    &Ray {
-                        o: origin,
-                        d: eye - origin,
-                    },
-                    1.0,
-                ) {
-                    let importance =
-                        self.importance(r.dir.dot(Vec3::from(self.camera.forward)), r.importance);
-                    let pdf_camera = importance * cos_l / r.dist2;
-                    let w = match self.mode {
-                        LightPassMode::LightTracing => 1.0,
-                        LightPassMode::Bidirectional => {
-                            weight_light_point_to_camera(pdf_camera, n_paths, light.pdf_area)
-                        }
-                    };
-                    let value = light.le / light.pdf_area * (pdf_camera * w / n_paths);
-                    splats.add((r.y * self.camera.width + r.x) as usize, value);
-                }
+                let pixel = (r.y * self.camera.width + r.x) as usize;
+                // The measurement W |cos| / dist², which times n_c is also the camera's density
+                // of the point.
+                let g_camera = self.importance(&r) * cos_l / r.dist2;
+                let w = match self.mode {
+                    LightPassMode::LightTracing => 1.0,
+                    LightPassMode::Bidirectional => weight_light_point_to_camera(
+                        g_camera * self.camera_subpaths[pixel] as f32,
+                        n_paths,
+                        light.pdf_area,
+                    ),
+                };
+                let value = light.le / light.pdf_area * (g_camera * w / n_paths);
+                let u = sampler.draw4(DIM_EMISSION)[3];
+                rays += self.splat(splats, pixel, light.p, light.p_err, light.n, value, u);
             }
         }
 
@@ -189,36 +220,24 @@ impl LightPass<'_> {
                 }
 
                 // Step 5 - connect to the camera (t = 1): splat α f W |cos| / dist² / N into
-                // the pixel that sees the vertex, if nothing is in between.
+                // the pixel that sees the vertex.
                 if let Some(r) = self.camera.raster(hit.p) {
-                    let to_eye = -r.dir;
-                    let bsdf = eval_diffuse(albedo, n_facing, wo, to_eye);
+                    let bsdf = eval_diffuse(albedo, n_facing, wo, -r.dir);
                     if bsdf.pdf > 0.0 && length + 1 <= max_path_edges(&self.faults) {
-                        let eye = Vec3::from(self.camera.eye);
-                        let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, to_eye);
-                        rays += 1;
-                        if !occluded(
-                            scene,
-                            &Ray {
-                                o: origin,
-                                d: eye - origin,
-                            },
-                            1.0,
-                        ) {
-                            let importance = self.importance(
-                                r.dir.dot(Vec3::from(self.camera.forward)),
-                                r.importance,
-                            );
-                            let pdf_camera = importance * bsdf.cos_i / r.dist2;
-                            let w = match self.mode {
-                                LightPassMode::LightTracing => 1.0,
-                                LightPassMode::Bidirectional => {
-                                    weight_to_camera(&mis, pdf_camera, n_paths, bsdf.pdf_rev)
-                                }
-                            };
-                            let value = throughput * bsdf.f * (pdf_camera * w / n_paths);
-                            splats.add((r.y * self.camera.width + r.x) as usize, value);
-                        }
+                        let pixel = (r.y * self.camera.width + r.x) as usize;
+                        let g_camera = self.importance(&r) * bsdf.cos_i / r.dist2;
+                        let w = match self.mode {
+                            LightPassMode::LightTracing => 1.0,
+                            LightPassMode::Bidirectional => weight_to_camera(
+                                &mis,
+                                g_camera * self.camera_subpaths[pixel] as f32,
+                                n_paths,
+                                bsdf.pdf_rev,
+                            ),
+                        };
+                        let value = throughput * bsdf.f * (g_camera * w / n_paths);
+                        let u = sampler.draw4(dim_splat(bounce))[0];
+                        rays += self.splat(splats, pixel, hit.p, hit.p_err, hit.n, value, u);
                     }
                 }
             }

@@ -84,21 +84,37 @@ pub fn render_pass(
 /// Light subpaths per parallel task of the light pass.
 const LIGHT_CHUNK: u32 = 256;
 
-/// What the light pass of one iteration leaves for the camera pass: the splats, and (BDPT) the
-/// light subpaths' stored vertices, subpath i's at `vertices[starts[i]..starts[i + 1]]`.
-/// Kept between iterations so that nothing is allocated per iteration but the chunks' lists.
+/// What the iterations of light tracing and BDPT share: the splats and (BDPT) the light
+/// subpaths' stored vertices of the current iteration, subpath i's at
+/// `vertices[starts[i]..starts[i + 1]]`, kept so that nothing is allocated per iteration but
+/// the chunks' lists; and what is fixed for the scene and camera, n_c per pixel and τ.
 pub struct LightPassBuffers {
     pub splats: Splats,
     pub vertices: Vec<LightVertex>,
     pub starts: Vec<u32>,
+    /// n_c per pixel (`subpath::camera_subpaths`).
+    pub camera_subpaths: Vec<u32>,
+    /// τ (`subpath::shadow_threshold`; BDPT only, 0 for light tracing).
+    pub shadow_threshold: f32,
 }
 
 impl LightPassBuffers {
-    pub fn new(width: u32, height: u32) -> LightPassBuffers {
+    pub fn new(scene: &FlatScene, camera: &Camera, method: Method) -> LightPassBuffers {
+        let bdpt = method == Method::Bdpt;
         LightPassBuffers {
-            splats: Splats::new(width, height),
+            splats: Splats::new(camera.width, camera.height),
             vertices: Vec::new(),
             starts: Vec::new(),
+            camera_subpaths: if bdpt {
+                crate::subpath::camera_subpaths(scene, camera)
+            } else {
+                vec![1; camera.width as usize * camera.height as usize]
+            },
+            shadow_threshold: if bdpt {
+                crate::subpath::shadow_threshold(scene, camera)
+            } else {
+                0.0
+            },
         }
     }
 }
@@ -134,6 +150,15 @@ pub fn render_iterations(
             _ => LightPassMode::LightTracing,
         },
         faults,
+        camera_subpaths: &buffers.camera_subpaths,
+        shadow_threshold: buffers.shadow_threshold,
+    };
+    let camera_pass = bdpt::CameraPass {
+        scene,
+        camera,
+        n_light_paths: n_paths,
+        faults,
+        shadow_threshold: buffers.shadow_threshold,
     };
     let mut rays = 0u64;
     for s in first..first + count {
@@ -176,18 +201,18 @@ pub fn render_iterations(
                         let index = (y * w + x) as usize;
                         let mut value = glam::Vec3::ZERO;
                         if method == Method::Bdpt {
+                            // The pixel's n_c camera subpaths, averaged; the k-th draws the
+                            // streams of pixel index + k · N (a camera subpath's own blocks
+                            // there: light subpaths stop at N).
                             let (a, b) = (buffers.starts[index], buffers.starts[index + 1]);
-                            value = bdpt::trace_camera_path(
-                                scene,
-                                camera,
-                                x,
-                                y,
-                                &Sampler::new(seed, index as u32, s),
-                                &buffers.vertices[a as usize..b as usize],
-                                n_paths,
-                                faults,
-                                &mut rays,
-                            );
+                            let light_path = &buffers.vertices[a as usize..b as usize];
+                            let n_c = buffers.camera_subpaths[index];
+                            for k in 0..n_c {
+                                let sampler = Sampler::new(seed, index as u32 + k * n_paths, s);
+                                value +=
+                                    camera_pass.trace(x, y, n_c, &sampler, light_path, &mut rays);
+                            }
+                            value /= n_c as f32;
                         }
                         out.push((index, buffers.splats.take(index).map(|splat| value + splat)));
                     }

@@ -22,6 +22,7 @@ use crate::method::Method;
 use crate::subpath::LightVertex;
 use anyhow::{bail, Result};
 use std::time::Instant;
+use wgpu::util::DeviceExt;
 
 /// Words of one tally cell (`CELL_WORDS` in `shaders/splat.wgsl`).
 const CELL_WORDS: u64 = 8;
@@ -67,9 +68,10 @@ impl Bidirectional {
         module: &wgpu::ShaderModule,
         scene_layout: &wgpu::BindGroupLayout,
         method: Method,
-        width: u32,
-        height: u32,
+        scene: &crate::flat::FlatScene,
+        camera: &crate::camera::Camera,
     ) -> Result<Bidirectional> {
+        let (width, height) = (camera.width, camera.height);
         let pixels = width as u64 * height as u64;
         let limits = device.limits();
         let max_binding =
@@ -105,7 +107,20 @@ impl Bidirectional {
         };
         let vertices = storage("light vertices", capacity as u64 * vertex_size);
         let tallies = storage("tallies", tallies_size);
-        let camera_radiance = storage("camera radiance", 16 * pixels);
+        // Each pixel's camera radiance of the iteration, and in the fourth lane its n_c
+        // (`subpath::camera_subpaths`, 1 for light tracing).
+        let n_c: Vec<[f32; 4]> = match method {
+            Method::Bdpt => crate::subpath::camera_subpaths(scene, camera)
+                .iter()
+                .map(|&n| [0.0, 0.0, 0.0, n as f32])
+                .collect(),
+            _ => vec![[0.0, 0.0, 0.0, 1.0]; pixels as usize],
+        };
+        let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("camera radiance"),
+            contents: bytemuck::cast_slice(&n_c),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let tally_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tally readback"),
             size: 4 * CELL_WORDS * MAX_PASS_SPP as u64,

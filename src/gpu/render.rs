@@ -46,7 +46,8 @@ pub struct Frame {
     pub path_count: u32,
     /// `Faults::importance_missing_cos` as 0 or 1 (test-only).
     pub importance_missing_cos: u32,
-    pub pad0: u32,
+    /// τ of BDPT's Russian roulette on visibility rays (`subpath::shadow_threshold`; 0: none).
+    pub shadow_threshold: f32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -277,7 +278,7 @@ impl GpuRenderer {
         };
         let layout = bind_group_layout(device, residency);
         let (pipeline, bidirectional) = if method.splats() {
-            let b = Bidirectional::new(device, &module, &layout, method, width, height)?;
+            let b = Bidirectional::new(device, &module, &layout, method, scene, &camera)?;
             (None, Some(b))
         } else {
             (
@@ -312,7 +313,10 @@ impl GpuRenderer {
             path_origin: 0,
             path_count: 0,
             importance_missing_cos: faults.importance_missing_cos as u32,
-            pad0: 0,
+            shadow_threshold: match method {
+                Method::Bdpt => crate::subpath::shadow_threshold(scene, &camera),
+                _ => 0.0,
+            },
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),

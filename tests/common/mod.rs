@@ -93,7 +93,7 @@ fn render_cpu_flat(
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     if method.splats() {
-        let mut buffers = LightPassBuffers::new(width, height);
+        let mut buffers = LightPassBuffers::new(flat, &camera, method);
         render_iterations(
             flat,
             &camera,
