@@ -857,6 +857,10 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     meta.set("dropped_samples", film.dropped());
     meta.set("width", args.width);
     meta.set("height", args.height);
+    let provenance = backend.provenance();
+    for (key, value) in &provenance {
+        meta.set(key, value);
+    }
     write_outputs(&out, &film, &meta, args)?;
 
     if !args.quiet {
@@ -880,6 +884,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
             mean[0], mean[1], mean[2], se[0], se[1], se[2]
         );
+        for (key, value) in &provenance {
+            eprintln!("{key}: {value}");
+        }
         let (exr, png, var) = output::output_paths(&out);
         eprintln!("wrote {} and {}", exr.display(), png.display());
         if args.variance {

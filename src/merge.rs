@@ -155,6 +155,18 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
                 first.meta.get("scene").unwrap_or("?"),
             )));
         }
+        // Files written before `--method` existed are path-traced.
+        let method_of = |p: &Part| p.meta.get("method").unwrap_or("path").to_string();
+        if method_of(p) != method_of(first) {
+            return Err(MergeError(format!(
+                "{}: rendered with --method {}, but {} with --method {}; merge only parts of one \
+                 method (their estimators and statistics differ)",
+                p.path.display(),
+                method_of(p),
+                first.path.display(),
+                method_of(first)
+            )));
+        }
         if (p.mean.width, p.mean.height) != (w, h) {
             return Err(MergeError(format!(
                 "{}: {}x{} pixels, but {} is {w}x{h}; render every part at one resolution",
@@ -213,6 +225,7 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
         "hexray_version",
         "width",
         "height",
+        "method",
     ] {
         if let Some(v) = first.meta.get(key) {
             meta.set(key, v);

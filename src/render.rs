@@ -13,6 +13,11 @@ pub trait Backend {
     /// The device it runs on, for logs and metadata.
     fn device(&self) -> String;
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()>;
+    /// What the method chose or met that an image's provenance should say (`key`, value), for
+    /// the EXR metadata and the log.
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
 }
 
 /// When to stop: after `spp` samples per pixel, after `seconds`, whichever comes first (at least
@@ -103,6 +108,24 @@ pub fn render_progressive(
     }
 }
 
+/// BDPT's choices for a render's provenance: τ of the Russian roulette on visibility rays, and
+/// how many pixels trace several camera subpaths per iteration.
+pub fn bidirectional_provenance(
+    shadow_threshold: f32,
+    pixels_with_more_camera_subpaths: usize,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("shadow_rr_threshold", format!("{shadow_threshold:e}")),
+        (
+            "specular_camera_subpaths",
+            format!(
+                "{} in {pixels_with_more_camera_subpaths} pixels",
+                crate::subpath::SPECULAR_CAMERA_SUBPATHS
+            ),
+        ),
+    ]
+}
+
 /// Refuses to add samples of `method` to a film that holds another kind: a film of a splatting
 /// method keeps the iterations' image means (batch means) and one of path tracing does not.
 pub fn check_film_for(method: crate::method::Method, film: &Film) -> anyhow::Result<()> {
@@ -161,6 +184,15 @@ impl Backend for CpuBackend<'_> {
     }
     fn device(&self) -> String {
         format!("{} threads", self.pool.current_num_threads())
+    }
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        match &self.buffers {
+            Some(b) if self.method == crate::method::Method::Bdpt => bidirectional_provenance(
+                b.shadow_threshold,
+                b.camera_subpaths.iter().filter(|&&n| n > 1).count(),
+            ),
+            _ => Vec::new(),
+        }
     }
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);

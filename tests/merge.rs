@@ -26,8 +26,20 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn render(scene: &str, seed: u32, spp: u32, out: &Path) {
+    render_with(scene, seed, spp, "path", out);
+}
+
+fn render_with(scene: &str, seed: u32, spp: u32, method: &str, out: &Path) {
     let o = hexray()
-        .args([scene, "--backend", "cpu", "--variance", "--quiet"])
+        .args([
+            scene,
+            "--backend",
+            "cpu",
+            "--variance",
+            "--quiet",
+            "--method",
+            method,
+        ])
         .args(["--width", SIZE, "--height", SIZE])
         .args(["--seed", &seed.to_string(), "--spp", &spp.to_string()])
         .arg("--out")
@@ -221,6 +233,40 @@ fn a_part_of_another_scene_is_refused_and_nothing_is_written() {
     for f in ["m.exr", "m.png", "m_var.exr"] {
         assert!(!dir.join(f).exists(), "{f} was written");
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_part_of_another_method_is_refused_naming_both() {
+    let dir = temp_dir("method");
+    let (p1, p2) = (dir.join("path.exr"), dir.join("bdpt.exr"));
+    render(SCENE, 1, 4, &p1);
+    render_with(SCENE, 2, 4, "bdpt", &p2);
+    let out = dir.join("m.exr");
+    let o = merge(&[p1, p2], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--method bdpt") && stderr.contains("--method path"),
+        "{stderr}"
+    );
+    assert!(!dir.join("m.exr").exists(), "m.exr was written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Parts of BDPT merge like path tracing's: per pixel, iterations are samples.
+#[test]
+fn bdpt_parts_merge_and_keep_their_method() {
+    let dir = temp_dir("bdpt");
+    let (p1, p2) = (dir.join("a.exr"), dir.join("b.exr"));
+    render_with(SCENE, 1, 4, "bdpt", &p1);
+    render_with(SCENE, 2, 4, "bdpt", &p2);
+    let out = dir.join("m.exr");
+    let o = merge(&[p1, p2], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, meta) = load(&out);
+    assert_eq!(meta.get("method"), Some("bdpt"));
+    assert_eq!(meta.get("spp"), Some("8"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -87,10 +87,6 @@ fn exact_image(d: &SceneDesc, width: u32, height: u32) -> Vec<[f64; 3]> {
     img
 }
 
-fn rows(_x: u32, y: u32) -> Option<usize> {
-    Some(y as usize)
-}
-
 /// The rows test, plus the pixels that break a deterministic rule: a plane pixel whose mean is
 /// not positive, or a pixel of a row wholly on the emitting wall (exact value Le) that is not Le
 /// in every sample (mean Le, variance 0).

@@ -49,6 +49,8 @@ pub struct Bidirectional {
     vertices_per_path: f64,
     /// Iterations traced again after a wave overflowed the pool.
     pub retraced: u64,
+    /// Pixels with n_c > 1 (for the provenance).
+    specular_pixels: usize,
 }
 
 /// Word offsets into the tallies (`shaders/splat.wgsl`) for an image of `pixels` pixels.
@@ -109,6 +111,13 @@ impl Bidirectional {
         let tallies = storage("tallies", tallies_size);
         // Each pixel's camera radiance of the iteration, and in the fourth lane its n_c
         // (`subpath::camera_subpaths`, 1 for light tracing).
+        let specular_pixels = match method {
+            Method::Bdpt => crate::subpath::camera_subpaths(scene, camera)
+                .iter()
+                .filter(|&&n| n > 1)
+                .count(),
+            _ => 0,
+        };
         let n_c: Vec<[f32; 4]> = match method {
             Method::Bdpt => crate::subpath::camera_subpaths(scene, camera)
                 .iter()
@@ -171,11 +180,34 @@ impl Bidirectional {
             capacity,
             vertices_per_path: FIRST_VERTICES_PER_PATH,
             retraced: 0,
+            specular_pixels,
         })
     }
 }
 
 impl GpuRenderer {
+    /// What the method chose or met (`Backend::provenance`): for BDPT its τ and n_c, and the
+    /// iterations traced again after a wave overflowed the light-vertex pool.
+    pub fn provenance(&self) -> Vec<(&'static str, String)> {
+        match &self.bidirectional {
+            Some(b) if b.camera_pipeline.is_some() => {
+                let mut v = crate::render::bidirectional_provenance(
+                    self.frame.shadow_threshold,
+                    b.specular_pixels,
+                );
+                v.push((
+                    "light_vertex_pool",
+                    format!(
+                        "{} vertices, {} iterations traced again",
+                        b.capacity, b.retraced
+                    ),
+                ));
+                v
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// One pass of light tracing or BDPT: iterations `first..first + count` (at most
     /// MAX_PASS_SPP), and again those whose waves overflowed the vertex pool, until every one
     /// has landed in the film.

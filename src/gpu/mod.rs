@@ -28,4 +28,7 @@ impl crate::render::Backend for GpuBackend {
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         self.renderer.render(first, count, film)
     }
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        self.renderer.provenance()
+    }
 }
