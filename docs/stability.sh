@@ -26,6 +26,7 @@ reference_list() {
 caustic scenes/stability/caustic.json 65536
 tiny_light_1e2 scenes/stability/tiny_light_1e2.json 65536
 tiny_light_1e0 scenes/tncg15_room.json 65536
+glass_room scenes/glass_room.json 65536
 tiny_light_1e4 scenes/stability/tiny_light_1e4.json 262144
 grazing scenes/stability/grazing.json 16384
 mirror_corridor scenes/stability/mirror_corridor.json 16384

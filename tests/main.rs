@@ -4,6 +4,7 @@
 //! `cargo test --release` quick. Run one file's tests with a filter: `cargo test --release furnace::`.
 
 mod bad_input;
+mod bdpt_references;
 mod bench;
 mod bidirectional_furnace;
 mod bidirectional_parity;
