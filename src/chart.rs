@@ -10,7 +10,7 @@ use std::path::Path;
 const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 const SIZE: (u32, u32) = (900, 600);
 /// Distinguishable line colours (Okabe and Ito's colour-blind-safe set).
-const PALETTE: [RGBColor; 7] = [
+const PALETTE: [RGBColor; 10] = [
     RGBColor(213, 94, 0),
     RGBColor(0, 114, 178),
     RGBColor(0, 158, 115),
@@ -18,6 +18,9 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(204, 121, 167),
     RGBColor(86, 180, 233),
     RGBColor(0, 0, 0),
+    RGBColor(136, 34, 85),
+    RGBColor(153, 153, 51),
+    RGBColor(120, 120, 120),
 ];
 
 fn register_font() {

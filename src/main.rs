@@ -227,9 +227,10 @@ struct CurveArgs {
     /// CPU threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     threads: Option<u32>,
-    /// Another renderer's curve to overlay (CSV: scene,variant,spp,seconds,rmse,relmse).
+    /// Another renderer's curve to overlay (CSV: scene,variant,spp,seconds,rmse,relmse; one
+    /// series per variant); may be given more than once.
     #[arg(long)]
-    overlay: Option<PathBuf>,
+    overlay: Vec<PathBuf>,
     /// The overlay rows to use (default: the scene's name).
     #[arg(long)]
     overlay_scene: Option<String>,
@@ -270,25 +271,26 @@ fn curve(args: &CurveArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
     let mut overlay = Vec::new();
-    if let Some(o) = &args.overlay {
+    for o in &args.overlay {
         let name = args
             .overlay_scene
             .clone()
             .unwrap_or(scene.desc.name.clone());
-        overlay = match hexray::curve::read_overlay(o, &name, &args.overlay_name) {
+        let rows = match hexray::curve::read_overlay(o, &name, &args.overlay_name) {
             Ok(v) => v,
             Err(e) => {
                 eprintln!("error: --overlay: {e:#}");
                 return Ok(ExitCode::from(EXIT_BAD_INPUT));
             }
         };
-        if overlay.is_empty() {
+        if rows.is_empty() {
             eprintln!(
                 "error: --overlay {}: no rows for scene `{name}` (choose with --overlay-scene)",
                 o.display()
             );
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
+        overlay.extend(rows);
     }
     let wants_gpu = args.backend.contains(&BenchBackend::Gpu);
     let gpu = if wants_gpu {

@@ -1,0 +1,202 @@
+#!/usr/bin/env bash
+# Method against method: relMSE against render time for path tracing, light tracing and BDPT on
+# each backend, with Mitsuba 3's `path` and `ptracer` measured in the same run (scene by scene,
+# Mitsuba's two curves right before hexray's), pictures at equal time, the cost of each method,
+# and docs/methods.md from all of it.
+#
+#   docs/methods.sh references   # deep 256x256 BDPT references of tncg15_room and glass_room
+#                                # (out/methods/refs, 25 min each on 2 cores; not committed)
+#   docs/methods.sh run          # curves, Mitsuba, pictures, bench -> docs/methods/ (~40 min)
+#   docs/methods.sh markdown     # docs/methods.md again from what `run` left in docs/methods/
+#   ONLY=caustic SECONDS_PER_CURVE=5 docs/methods.sh run   # one scene, short curves (a trial)
+#
+# HEXRAY (default target/release/hexray) is the binary. Mitsuba is optional: with
+# MITSUBA_PYTHON (default $HOME/mi/bin/python, see ../shared/mitsuba/README.md) missing, its
+# curves are left out and the page says so. The GPU backend runs on whatever adapter wgpu finds
+# (lavapipe here); without one, only the CPU's curves are drawn.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+hexray=${HEXRAY:-target/release/hexray}
+mitsuba_python=${MITSUBA_PYTHON:-$HOME/mi/bin/python}
+mitsuba_side=${MITSUBA_SIDE:-../shared/mitsuba/mitsuba_side.py}
+out=docs/methods
+refs=out/methods/refs
+seconds=${SECONDS_PER_CURVE:-30}
+
+# name, scene file, reference (a render with NAME_var beside it), size; ONLY=name1\|name2
+# keeps those scenes.
+scene_list() {
+    all_scenes | grep -e "^\(${ONLY:-.*}\) "
+}
+
+all_scenes() {
+    cat <<EOF
+tncg15_room scenes/tncg15_room.json $refs/tncg15_room_256.exr 256
+glass_room scenes/glass_room.json $refs/glass_room_256.exr 256
+cornell_box scenes/cornell_box.json tests/data/references/cornell_box_256.npy 256
+caustic scenes/stability/caustic.json tests/data/references/stability/caustic_32.exr 32
+tiny_light_1e2 scenes/stability/tiny_light_1e2.json tests/data/references/stability/tiny_light_1e2_32.exr 32
+EOF
+}
+
+references() {
+    mkdir -p "$refs"
+    for name in tncg15_room glass_room; do
+        echo "== $name: BDPT for 1500 s"
+        "$hexray" reference "scenes/$name.json" --backend cpu --method bdpt --time 1500 \
+            --width 256 --height 256 --seed 424242 --out "$refs/${name}_256.exr" --quiet
+    done
+}
+
+have_mitsuba() {
+    [ -x "$mitsuba_python" ] && [ -f "$mitsuba_side" ]
+}
+
+have_gpu() {
+    "$hexray" info | grep -q '^\['
+}
+
+# Mitsuba's curve of one integrator, its `variant` column renamed to the integrator.
+mitsuba_curve() {
+    local scene=$1 ref=$2 size=$3 integrator=$4
+    "$mitsuba_python" "$mitsuba_side" curve "$scene" --ref "$ref" --res "$size" \
+        --seconds "$seconds" --integrator "$integrator" | sed "s/,llvm_ad_rgb,/,$integrator,/"
+}
+
+run() {
+    local backends=cpu
+    have_gpu && backends=cpu,gpu
+    mkdir -p "$out"
+    scene_list | while read -r name scene ref size; do
+        [ -f "$ref" ] || { echo "missing $ref: run docs/methods.sh references first" >&2; exit 1; }
+        local dir=$out/$name
+        mkdir -p "$dir"
+        local overlay=()
+        if have_mitsuba; then
+            echo "== $name: Mitsuba path and ptracer, $seconds s each"
+            {
+                mitsuba_curve "$scene" "$ref" "$size" path
+                mitsuba_curve "$scene" "$ref" "$size" ptracer | tail -n +2
+            } > "$dir/mitsuba.csv"
+            overlay=(--overlay "$dir/mitsuba.csv")
+        fi
+        echo "== $name: hexray $backends, path, light, bdpt, $seconds s each"
+        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt \
+            --time "$seconds" --reference "$ref" "${overlay[@]}" --out "$dir"
+        "$hexray" compare "$ref" "$ref" --json > "$dir/reference.json"
+        echo "== $name: pictures, 10 s each"
+        for method in path light bdpt; do
+            "$hexray" render "$scene" --backend cpu --method "$method" --time 10 \
+                --width "$size" --height "$size" --seed 5 --out "out/methods/${name}_$method.exr" \
+                --quiet
+            cp "out/methods/${name}_$method.png" "$dir/$method.png"
+        done
+    done
+    echo "== the README's picture: tncg15_room 512x512, path and bdpt for 15 s each"
+    for method in path bdpt; do
+        "$hexray" render scenes/tncg15_room.json --backend cpu --method "$method" --time 15 \
+            --seed 5 --out "out/methods/readme_$method.exr" --quiet
+        cp "out/methods/readme_$method.png" "$out/tncg15_room_512_$method.png"
+    done
+    echo "== cost: hexray bench, 256x256, 32 samples or iterations"
+    "$hexray" bench --backend "${backends}" --method path,light,bdpt --spp 32 \
+        --out "$out/bench.json" > "$out/bench.txt"
+    markdown
+}
+
+markdown() {
+    python3 - "$out" "$seconds" <(scene_list) <<'PY' > docs/methods.md.tmp
+import csv, json, math, os, sys
+out, budget = sys.argv[1], float(sys.argv[2])
+scenes = [l.split() for l in open(sys.argv[3]) if l.strip()]
+
+def series(name):
+    rows = []
+    path = f"{out}/{name}/curve.csv"
+    if os.path.exists(path):
+        rows += [(r["backend"], float(r["seconds"]), float(r["relmse"]), int(r["spp"])) for r in csv.DictReader(open(path))]
+    path = f"{out}/{name}/mitsuba.csv"
+    if os.path.exists(path):
+        rows += [("mitsuba " + r["variant"], float(r["seconds"]), float(r["relmse"]), int(r["spp"])) for r in csv.DictReader(open(path))]
+    by = {}
+    for b, s, e, n in rows:
+        by.setdefault(b, []).append((s, e, n))
+    return {b: sorted(v) for b, v in by.items()}
+
+def at(points, t):
+    """relMSE at time t, log-log between the waves around it (None outside the curve)."""
+    for (s0, e0, _), (s1, e1, _) in zip(points, points[1:]):
+        if s0 <= t <= s1 and e0 > 0 and e1 > 0:
+            f = (math.log(t) - math.log(s0)) / (math.log(s1) - math.log(s0))
+            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
+    return None
+
+def fmt(x):
+    return "–" if x is None else f"{x:.2e}"
+
+print("# Method against method\n")
+print("Generated by `docs/methods.sh run` (this page alone: `docs/methods.sh markdown`). relMSE = mean")
+print("(x − r)²/(r² + 0.01) over pixel-channels, against the reference named per scene, at equal render")
+print(f"time after warm-up ({budget:.0f} s per curve), on the machine in each chart's caption. The")
+print("reference's own noise (mean var_r/(r² + 0.01), from its variance file) is subtracted in the")
+print("tables (E (x − r)² = var_x + var_r) and given with them. Mitsuba 3's `path` and `ptracer`")
+print("(`llvm_ad_rgb`, all cores) were measured in the same run, scene by scene, just before hexray's")
+print("curves, with `../shared/mitsuba/mitsuba_side.py curve`.\n")
+print("Light tracing (`light`) sees nothing through a mirror or glass, so its error has a floor")
+print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere. The methods themselves:")
+print("`src/cpu/path.rs`, `src/cpu/light_path.rs`, `src/cpu/bdpt.rs` and `src/subpath.rs`.\n")
+summary = []
+for name, scene, ref, size in scenes:
+    s = series(name)
+    if not s:
+        continue
+    noise = None
+    if os.path.exists(f"{out}/{name}/reference.json"):
+        noise = json.load(open(f"{out}/{name}/reference.json")).get("relmse_reference_noise")
+    print(f"## {name}\n")
+    print(f"`{scene}`, {size}x{size}, reference `{ref}` (its own relMSE noise {fmt(noise)}).\n")
+    print(f"![{name}: relMSE against time]({os.path.basename(out)}/{name}/relmse_vs_seconds.png)\n")
+    print(f"| series | relMSE at {budget:.0f} s | minus the reference's noise | ratio to hexray path (same backend) |")
+    print("| --- | --- | --- | --- |")
+    vals = {}
+    for b, pts in s.items():
+        v = at(pts, budget)
+        if v is None and pts and pts[-1][0] < budget:
+            v = pts[-1][1]
+        vals[b] = v
+    for b, v in vals.items():
+        c = None if v is None else v - (noise or 0.0)
+        backend = b.split()[1] if b.startswith("hexray") else None
+        base = vals.get(f"hexray {backend} path") if backend else None
+        ratio = None
+        if c is not None and base is not None:
+            cb = base - (noise or 0.0)
+            ratio = c / cb if cb > 0 else None
+        print(f"| {b} | {fmt(v)} | {fmt(c)} | {'–' if ratio is None else f'{ratio:.2f}'} |")
+        summary.append((name, b, c, ratio))
+    print()
+    pics = [m for m in ("path", "light", "bdpt") if os.path.exists(f"{out}/{name}/{m}.png")]
+    if pics:
+        print("Pictures, 10 s each on the CPU backend: " + ", ".join(pics) + ".\n")
+        print("| " + " | ".join(pics) + " |")
+        print("| " + " | ".join("---" for _ in pics) + " |")
+        print("| " + " | ".join(f"![{m}]({os.path.basename(out)}/{name}/{m}.png)" for m in pics) + " |\n")
+if os.path.exists(f"{out}/bench.txt"):
+    print("## Cost\n")
+    print("`hexray bench --method path,light,bdpt --spp 32` (256x256; a BDPT or light-tracing")
+    print("\"camera path\" is one pixel's iteration, its light subpath included; rays per path are")
+    print("counted on the CPU):\n")
+    print("```")
+    print(open(f"{out}/bench.txt").read().rstrip())
+    print("```\n")
+PY
+    mv docs/methods.md.tmp docs/methods.md
+    echo "wrote docs/methods.md"
+}
+
+case "${1:-}" in
+    references) references ;;
+    run) run ;;
+    markdown) markdown ;;
+    *) sed -n '2,16p' "$0"; exit 2 ;;
+esac
