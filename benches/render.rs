@@ -29,6 +29,7 @@ fn main() {
         height: 256,
         spp: 64,
         seed: 1,
+        methods: vec![hexray::method::Method::Path],
         light_samples: 1,
         threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
     };

@@ -41,10 +41,12 @@ EOF
 
 references() {
     mkdir -p "$refs"
+    local seed=777
     for name in tncg15_room glass_room; do
         echo "== $name: BDPT for 1500 s"
         "$hexray" reference "scenes/$name.json" --backend cpu --method bdpt --time 1500 \
-            --width 256 --height 256 --seed 424242 --out "$refs/${name}_256.exr" --quiet
+            --width 256 --height 256 --seed $seed --out "$refs/${name}_256.exr" --quiet
+        seed=$((seed + 1))
     done
 }
 

@@ -85,7 +85,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             let wi = to_light / sqrt(dist2);
             let cos_l = -dot(ls.n, wi);
             let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-            if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth + 1u <= max_edges {
+            if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth < max_edges {
                 let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
                 let w = weight_next_event(m, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);

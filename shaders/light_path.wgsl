@@ -139,7 +139,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
             let rv = camera_raster(camera, hit.p);
             if rv.seen {
                 let bsdf = eval_diffuse(material.color, n_facing, wo, -rv.dir);
-                if bsdf.pdf > 0.0 && length + 1u <= max_path_edges() {
+                if bsdf.pdf > 0.0 && length < max_path_edges() {
                     let pixel = rv.y * camera.width + rv.x;
                     let g_camera = splat_importance(rv) * bsdf.cos_i / rv.dist2;
                     var w = 1.0;

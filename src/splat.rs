@@ -26,8 +26,8 @@ pub const SCALE: f32 = (1u64 << FRACTION_BITS) as f32;
 #[inline]
 pub fn to_fixed(v: f32) -> Option<u64> {
     let r = (v * SCALE).round_ties_even();
-    // 2^64 as f32 is exact; written so that NaN fails too.
-    if r >= 0.0 && r < 18_446_744_073_709_551_616.0 {
+    // 2^64 as f32 is exact; NaN is in no range.
+    if (0.0..18_446_744_073_709_551_616.0).contains(&r) {
         Some(r as u64)
     } else {
         None

@@ -40,11 +40,19 @@ use glam::Vec3;
 /// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass.
 /// There the camera subpath is all BDPT has: light tracing cannot reach the pixel, and what is
 /// seen in the mirror (a wall lit through the mirror: camera - mirror - diffuse - mirror -
-/// light) is found by the camera subpath alone, as in path tracing. One camera subpath per
-/// iteration would leave those pixels with a fourth of path tracing's samples at equal time
-/// (an iteration costs about four path-traced samples), so they take several. Measured on
-/// tncg15_room and glass_room at 256x256, 30 s on 2 cores (docs/methods.md): relMSE 7.5e-3 and
-/// 4.7e-3 with 1, 4.0e-3 and 2.7e-3 with 3, 3.4e-3 and 2.6e-3 with 5, 3.6e-3 with 8.
+/// light) is found by the camera subpath alone, as in path tracing. With one camera subpath per
+/// iteration those pixels would get a third of path tracing's samples at equal time (an
+/// iteration costs about three path-traced samples), so they take several. Measured by editing
+/// this constant (tncg15_room and glass_room, 256x256, 30 s on 2 cores, seed 9, relMSE against
+/// the BDPT references of `docs/methods.sh references`, whose own noise is 2.1e-4 and 1.4e-4):
+///
+/// | camera subpaths | 1 | 3 | 5 | 8 |
+/// | --- | --- | --- | --- | --- |
+/// | tncg15_room | 5.9e-3 | 3.2e-3 | 2.7e-3 | 2.6e-3 |
+/// | glass_room | 3.6e-3 | 2.0e-3 | 1.8e-3 | 1.7e-3 |
+///
+/// 5 and 8 are within the runs' noise of each other; 5 leaves more iterations (light subpaths)
+/// to the rest of the image.
 pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 
 /// n_c(j) for every pixel j, row by row: [`SPECULAR_CAMERA_SUBPATHS`] where the ray through the
@@ -71,6 +79,12 @@ pub fn camera_subpaths(scene: &FlatScene, camera: &Camera) -> Vec<u32> {
 }
 
 /// The shadow-ray threshold as a share of the image's mean radiance (see [`shadow_survival`]).
+/// Measured as [`SPECULAR_CAMERA_SUBPATHS`] was, with 5 camera subpaths:
+///
+/// | fraction | 0 (no roulette) | 0.05 | 0.1 | 0.2 |
+/// | --- | --- | --- | --- | --- |
+/// | tncg15_room | 3.5e-3 | 2.6e-3 | 2.7e-3 | 3.1e-3 |
+/// | glass_room | 2.2e-3 | 1.8e-3 | 1.8e-3 | 2.3e-3 |
 pub const SHADOW_RR_FRACTION: f32 = 0.1;
 
 /// Russian roulette on the visibility rays of BDPT's connections (next-event estimation, the
@@ -79,7 +93,7 @@ pub const SHADOW_RR_FRACTION: f32 = 0.1;
 /// with probability c / τ and is divided by it, which keeps it unbiased
 /// (E[V c / q · 1{u < q}] = V c) and adds at most τ c of variance. Most connections of a room
 /// carry little (on tncg15_room three quarters carry under 1 % of a pixel's value, together 27 %
-/// of the light); their rays were half the time of an iteration. Returns the probability of
+/// of the light), and their rays were half of an iteration's rays. Returns the probability of
 /// tracing the ray (1 above the threshold, and where τ is 0).
 #[inline]
 pub fn shadow_survival(contribution: Vec3, threshold: f32) -> f32 {

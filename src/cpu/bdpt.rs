@@ -152,7 +152,7 @@ impl CameraPass<'_> {
                 let wi = to_light / dist2.sqrt();
                 let cos_l = -ls.n.dot(wi);
                 let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-                if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth + 1 <= max_edges {
+                if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth < max_edges {
                     let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                     let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
                     let w = weight_next_event(&mis, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);

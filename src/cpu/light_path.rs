@@ -223,7 +223,7 @@ impl LightPass<'_> {
                 // the pixel that sees the vertex.
                 if let Some(r) = self.camera.raster(hit.p) {
                     let bsdf = eval_diffuse(albedo, n_facing, wo, -r.dir);
-                    if bsdf.pdf > 0.0 && length + 1 <= max_path_edges(&self.faults) {
+                    if bsdf.pdf > 0.0 && length < max_path_edges(&self.faults) {
                         let pixel = (r.y * self.camera.width + r.x) as usize;
                         let g_camera = self.importance(&r) * bsdf.cos_i / r.dist2;
                         let w = match self.mode {

@@ -81,6 +81,9 @@ pub fn render_pass(
     rays
 }
 
+/// One tile's pixel values of an iteration (None where a splat sum overflowed), and its rays.
+type TileValues = (Vec<(usize, Option<glam::Vec3>)>, u64);
+
 /// Light subpaths per parallel task of the light pass.
 const LIGHT_CHUNK: u32 = 256;
 
@@ -190,7 +193,7 @@ pub fn render_iterations(
         // The camera pass: each pixel's camera subpath (BDPT), plus its splats.
         let buffers = &*buffers;
         let tiles_x = w.div_ceil(TILE);
-        let results: Vec<(Vec<(usize, Option<glam::Vec3>)>, u64)> = (0..tiles_x * h.div_ceil(TILE))
+        let results: Vec<TileValues> = (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
             .map(|t| {
                 let (tx, ty) = (t % tiles_x, t / tiles_x);

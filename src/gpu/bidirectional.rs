@@ -76,8 +76,9 @@ impl Bidirectional {
         let (width, height) = (camera.width, camera.height);
         let pixels = width as u64 * height as u64;
         let limits = device.limits();
-        let max_binding =
-            (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+        let max_binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         let vertex_size = std::mem::size_of::<LightVertex>() as u64;
         let tallies_size = 4 * tally_words(pixels);
         if tallies_size > max_binding || 16 * pixels > max_binding {
