@@ -88,7 +88,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth < max_edges {
                 let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
-                let w = weight_next_event(m, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
+                let w = weight_next_event(m, iteration_merge(), bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
                 let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                 radiance += value * visibility(hit.p, hit.p_err, hit.n, ls.p, ls.p_err, ls.n, value, u_bsdf.w);
             }
@@ -118,6 +118,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
                 let w = weight_connection(
                     m,
                     light_mis,
+                    iteration_merge(),
                     camera_bsdf.pdf * light_bsdf.cos_i / dist2,
                     camera_bsdf.pdf_rev,
                     light_bsdf.pdf * camera_bsdf.cos_i / dist2,
@@ -127,9 +128,11 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
                 let u = draw4(sampler, dim_connection(bounce, i - 1u))[(i - 1u) % 4u];
                 radiance += value * visibility(hit.p, hit.p_err, hit.n, v.p, vec3<f32>(v.p_err), v.n, value, u);
             }
+
+            // Step 6 - merging (VCM, SPPM): on the CPU backend only so far (src/cpu/bdpt.rs).
         }
 
-        // Step 6 - scattering: sample the BSDF for the next direction; the throughput takes
+        // Step 7 - scattering: sample the BSDF for the next direction; the throughput takes
         // the sample's weight and the quantities its densities.
         let bs = sample_bsdf(material, hit.n, wo, u_bsdf, TRANSPORT_RADIANCE);
         let cos_out = abs(dot(hit.n, bs.wi));
@@ -138,7 +141,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             throughput *= frame.specular_scale;
             m = mis_after_specular(m, cos_out);
         } else {
-            m = mis_after_diffuse(m, cos_out, bs.pdf, abs(cos_o) * FRAC_1_PI);
+            m = mis_after_diffuse(m, cos_out, bs.pdf, abs(cos_o) * FRAC_1_PI, iteration_merge());
         }
         eta_scale *= bs.eta2;
         if max_element(throughput) <= 0.0 || depth >= max_edges {
@@ -146,7 +149,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
         }
         ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
 
-        // Step 7 - Russian roulette, as in path.wgsl: from bounce RR_START_BOUNCE on, continue
+        // Step 8 - Russian roulette, as in path.wgsl: from bounce RR_START_BOUNCE on, continue
         // with probability q = min(max(throughput) · eta_scale, 0.95) and divide by q.
         if bounce >= RR_START_BOUNCE {
             let q = min(max_element(throughput) * eta_scale, RR_MAX_SURVIVAL);

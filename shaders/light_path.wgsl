@@ -98,7 +98,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     var throughput = light.le * (emission.cos / (light.pdf_area * emission.pdf_dir));
     // The product of the BSDF weights alone, which Russian roulette looks at.
     var scattered = vec3<f32>(1.0);
-    var m = mis_light(light.pdf_area, emission.pdf_dir, emission.cos);
+    var m = mis_light(light.pdf_area, emission.pdf_dir, emission.cos, iteration_merge());
     var ray = Ray(offset_ray_origin(light.p, light.p_err, light.n, emission.dir), emission.dir);
     var bounce = 0u;
 
@@ -144,7 +144,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
                     let g_camera = splat_importance(rv) * bsdf.cos_i / rv.dist2;
                     var w = 1.0;
                     if bidirectional {
-                        w = weight_to_camera(m, g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
+                        w = weight_to_camera(m, iteration_merge(), g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
                     }
                     let value = throughput * bsdf.f * (g_camera * w / n_paths);
                     splat(pixel, hit.p, hit.p_err, hit.n, value, draw4(sampler, dim_splat(bounce)).x);
@@ -164,7 +164,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
         } else {
             scattered *= bs.weight;
             throughput *= bs.weight;
-            m = mis_after_diffuse(m, cos_out, bs.pdf, abs(cos_o) * FRAC_1_PI);
+            m = mis_after_diffuse(m, cos_out, bs.pdf, abs(cos_o) * FRAC_1_PI, iteration_merge());
         }
         if max_element(scattered) <= 0.0 {
             break;

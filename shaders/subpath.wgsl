@@ -48,6 +48,18 @@ fn mis(x: f32) -> f32 {
     return x * x;
 }
 
+// Merging's constants in the weights (`MergeMis`): vm = eta^beta, vc = eta^-beta with
+// eta = pi r^2 N; both 0 without merging (BDPT), which leaves BDPT's weights exactly.
+struct MergeMis {
+    vm: f32,
+    vc: f32,
+}
+
+// This iteration's merging constants (the GPU backend does not merge yet: BDPT's).
+fn iteration_merge() -> MergeMis {
+    return MergeMis(0.0, 0.0);
+}
+
 // Georgiev's recursive quantities of one subpath vertex (`SubpathMis`).
 struct SubpathMis {
     d_vcm: f32,
@@ -62,9 +74,10 @@ fn mis_camera(n_light_paths: f32, pdf_camera: f32) -> SubpathMis {
 }
 
 // At the light point: its area density, the direction's density and the emitter's cosine.
-fn mis_light(pdf_area: f32, pdf_dir: f32, cos: f32) -> SubpathMis {
+fn mis_light(pdf_area: f32, pdf_dir: f32, cos: f32, merge: MergeMis) -> SubpathMis {
     let emission_pdf = pdf_area * pdf_dir;
-    return SubpathMis(mis(pdf_area / emission_pdf), mis(cos / emission_pdf), 0.0);
+    let d_vc = mis(cos / emission_pdf);
+    return SubpathMis(mis(pdf_area / emission_pdf), d_vc, d_vc * merge.vc);
 }
 
 // At a hit dist2 (squared) away, |cos| at the surface: solid angle becomes area.
@@ -73,14 +86,17 @@ fn mis_at_hit(m: SubpathMis, dist2: f32, cos: f32) -> SubpathMis {
     r.d_vcm *= mis(dist2);
     r.d_vcm /= mis(cos);
     r.d_vc /= mis(cos);
+    r.d_vm /= mis(cos);
     return r;
 }
 
 // After sampling a direction at a non-specular vertex: density pdf, cosine cos_out, and the
-// reverse density pdf_rev of the arriving direction.
-fn mis_after_diffuse(m: SubpathMis, cos_out: f32, pdf: f32, pdf_rev: f32) -> SubpathMis {
+// reverse density pdf_rev of the arriving direction; with merging, the merge here too.
+fn mis_after_diffuse(m: SubpathMis, cos_out: f32, pdf: f32, pdf_rev: f32, merge: MergeMis) -> SubpathMis {
     var r = m;
-    r.d_vc = mis(cos_out / pdf) * (m.d_vc * mis(pdf_rev) + m.d_vcm);
+    let ratio = mis(cos_out / pdf);
+    r.d_vc = ratio * (m.d_vc * mis(pdf_rev) + m.d_vcm + merge.vm);
+    r.d_vm = ratio * (m.d_vm * mis(pdf_rev) + m.d_vcm * merge.vc + 1.0);
     r.d_vcm = mis(1.0 / pdf);
     return r;
 }
@@ -90,6 +106,7 @@ fn mis_after_specular(m: SubpathMis, cos_out: f32) -> SubpathMis {
     var r = m;
     r.d_vcm = 0.0;
     r.d_vc *= mis(cos_out);
+    r.d_vm *= mis(cos_out);
     return r;
 }
 
@@ -100,26 +117,34 @@ fn weight_emission(camera: SubpathMis, pdf_area: f32, pdf_dir: f32) -> f32 {
 }
 
 // s = 1: next-event estimation from a camera vertex.
-fn weight_next_event(camera: SubpathMis, pdf_bsdf: f32, pdf_light: f32, pdf_emit: f32, pdf_rev: f32) -> f32 {
+fn weight_next_event(camera: SubpathMis, merge: MergeMis, pdf_bsdf: f32, pdf_light: f32, pdf_emit: f32, pdf_rev: f32) -> f32 {
     let w_light = mis(pdf_bsdf / pdf_light);
-    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev));
+    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev) + merge.vm);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // s >= 2, t >= 2: a camera vertex connected to a stored light vertex.
-fn weight_connection(camera: SubpathMis, light: SubpathMis, camera_to_light: f32, camera_rev: f32, light_to_camera: f32, light_rev: f32) -> f32 {
-    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev));
-    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev));
+fn weight_connection(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32, light_to_camera: f32, light_rev: f32) -> f32 {
+    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev) + merge.vm);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // t = 1: a light vertex connected to the camera.
-fn weight_to_camera(light: SubpathMis, pdf_camera: f32, n_light_paths: f32, light_rev: f32) -> f32 {
-    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev));
+fn weight_to_camera(light: SubpathMis, merge: MergeMis, pdf_camera: f32, n_light_paths: f32, light_rev: f32) -> f32 {
+    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
     return 1.0 / (w_light + 1.0);
 }
 
 // s = 1, t = 1: the light point itself seen by the camera.
 fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f32) -> f32 {
     return 1.0 / (1.0 + mis(pdf_camera / (n_light_paths * pdf_area)));
+}
+
+// Merging a photon (light vertex) at a camera vertex, against the connection at the light
+// vertex and every strategy earlier on either subpath.
+fn weight_merge(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32) -> f32 {
+    let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
+    let w_camera = camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev);
+    return 1.0 / (w_light + 1.0 + w_camera);
 }

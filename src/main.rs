@@ -90,10 +90,20 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     scene_residency: Option<ResidencyChoice>,
     /// Light-transport method. `light` sees nothing through mirrors or glass (those surfaces
-    /// stay black); `light` and `bdpt` take one iteration (a light subpath and a camera subpath
-    /// per pixel) per sample.
+    /// stay black); `light`, `bdpt`, `sppm` and `vcm` take one iteration (a light subpath and a
+    /// camera subpath per pixel) per sample. `sppm` and `vcm` merge photons: consistent, not
+    /// unbiased (the bias shrinks with the radius over iterations; the standard error does not
+    /// cover it).
     #[arg(long, value_enum, default_value_t = Method::Path)]
     method: Method,
+    /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.003 x the scene's
+    /// bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm with 0 is
+    /// bdpt.
+    #[arg(long, value_parser = parse_radius)]
+    radius: Option<f32>,
+    /// Radius reduction alpha of sppm and vcm, in (0, 1] (default 0.75; 1 keeps the radius).
+    #[arg(long, value_parser = parse_alpha)]
+    alpha: Option<f32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
     /// (path tracing only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
@@ -603,6 +613,50 @@ fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
     }
 }
 
+fn parse_radius(s: &str) -> std::result::Result<f32, String> {
+    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err("the merge radius must be a finite number >= 0 (scene units)".into())
+    }
+}
+
+fn parse_alpha(s: &str) -> std::result::Result<f32, String> {
+    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err("alpha must be in (0, 1]".into())
+    }
+}
+
+/// The merge radius a command line asks for, or an error for the user (exit 2): `--radius` and
+/// `--alpha` only with a merging method, and sppm needs a radius above 0.
+fn merge_radius_of(
+    method: Method,
+    radius: Option<f32>,
+    alpha: Option<f32>,
+    flat: &FlatScene,
+) -> std::result::Result<hexray::merging::MergeRadius, String> {
+    if !method.merges() && (radius.is_some() || alpha.is_some()) {
+        return Err(format!(
+            "--radius and --alpha are for --method sppm and vcm, not {method}"
+        ));
+    }
+    let mut r = hexray::merging::MergeRadius::default_for(flat);
+    if let Some(v) = radius {
+        r.initial = v;
+    }
+    if let Some(a) = alpha {
+        r.alpha = a;
+    }
+    if method == Method::Sppm && r.initial <= 0.0 {
+        return Err("--method sppm needs a merge radius above 0".into());
+    }
+    Ok(r)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let args = match cli.command {
@@ -708,6 +762,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
     let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
+    let radius = match merge_radius_of(args.method, args.radius, args.alpha, &flat) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
     let gpu = match args.backend {
         BackendChoice::Cpu => None,
         BackendChoice::Gpu => match gpu::acquire(args.adapter.as_deref()) {
@@ -753,7 +814,16 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
             cpu.light_samples = args.light_samples;
             cpu.method = args.method;
+            cpu.radius = Some(radius);
             Box::new(cpu)
+        }
+        Some(g) if args.method.merges() => {
+            eprintln!(
+                "error: --method {} runs on --backend cpu only so far; the GPU backend (found {}) \
+                 has path, light and bdpt",
+                args.method, g.info.name
+            );
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
         Some(g) => {
             let checks = if args.shader_checks {
@@ -886,6 +956,16 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
             mean[0], mean[1], mean[2], se[0], se[1], se[2]
         );
+        if args.method.merges() {
+            eprintln!(
+                "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
+                 (alpha {}) leaves a bias that the standard error does not cover",
+                args.method,
+                radius.initial,
+                radius.at(report.spp.saturating_sub(1)),
+                radius.alpha
+            );
+        }
         for (key, value) in &provenance {
             eprintln!("{key}: {value}");
         }

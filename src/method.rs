@@ -14,6 +14,15 @@ pub enum Method {
     /// Bidirectional path tracing (`src/cpu/bdpt.rs`): every connection of a camera subpath and
     /// a light subpath, weighed by MIS.
     Bdpt,
+    /// Stochastic progressive photon mapping (`src/cpu/bdpt.rs` in its photon-mapping mode):
+    /// each camera subpath follows mirrors and glass to its first diffuse vertex and gathers
+    /// the photons (light vertices) of the iteration within a radius that shrinks over
+    /// iterations. Consistent, not unbiased: the bias vanishes as the radius does.
+    Sppm,
+    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies and
+    /// photon merging at every diffuse camera vertex, all weighed by MIS. Consistent, not
+    /// unbiased.
+    Vcm,
 }
 
 impl Method {
@@ -22,6 +31,8 @@ impl Method {
             Method::Path => "path",
             Method::Light => "light",
             Method::Bdpt => "bdpt",
+            Method::Sppm => "sppm",
+            Method::Vcm => "vcm",
         }
     }
 
@@ -33,10 +44,23 @@ impl Method {
             .find(|m| m.name() == name)
     }
 
-    /// Whether the method splats light subpaths into the image, so that an iteration's pixels
-    /// share samples and its statistics are batch means (`film.rs`).
+    /// Whether the method traces light subpaths that every pixel of an iteration may use
+    /// (splatted or merged), so that an iteration's pixels share samples and its statistics
+    /// are batch means (`film.rs`).
     pub fn splats(self) -> bool {
-        matches!(self, Method::Light | Method::Bdpt)
+        !matches!(self, Method::Path)
+    }
+
+    /// Whether the method merges photons: consistent rather than unbiased, with a bias that
+    /// the film's standard error does not cover and that vanishes as the radius shrinks.
+    pub fn merges(self) -> bool {
+        matches!(self, Method::Sppm | Method::Vcm)
+    }
+
+    /// Whether the method connects camera vertices to light vertices and emitters (BDPT's
+    /// strategies).
+    pub fn connects(self) -> bool {
+        matches!(self, Method::Bdpt | Method::Vcm)
     }
 }
 

@@ -126,6 +126,14 @@ pub fn bidirectional_provenance(
     ]
 }
 
+/// The merging methods' radius for a render's provenance: r_1 (scene units) and α.
+pub fn merging_provenance(radius: &crate::merging::MergeRadius) -> Vec<(&'static str, String)> {
+    vec![
+        ("merge_radius", format!("{:e}", radius.initial)),
+        ("merge_alpha", format!("{}", radius.alpha)),
+    ]
+}
+
 /// Refuses to add samples of `method` to a film that holds another kind: a film of a splatting
 /// method keeps the iterations' image means (batch means) and one of path tracing does not.
 pub fn check_film_for(method: crate::method::Method, film: &Film) -> anyhow::Result<()> {
@@ -150,7 +158,9 @@ pub struct CpuBackend<'a> {
     /// Rays traced so far (closest-hit and shadow), for the benchmark.
     pub rays: u64,
     pub pool: rayon::ThreadPool,
-    /// Light tracing and BDPT: the light pass's splats and vertices, made at the first pass.
+    /// The merge radius's schedule (SPPM, VCM; default: `MergeRadius::default_for`).
+    pub radius: Option<crate::merging::MergeRadius>,
+    /// The light-subpath methods: the light pass's splats and vertices, made at the first pass.
     buffers: Option<crate::cpu::LightPassBuffers>,
 }
 
@@ -173,6 +183,7 @@ impl<'a> CpuBackend<'a> {
             method: crate::method::Method::Path,
             rays: 0,
             pool,
+            radius: None,
             buffers: None,
         })
     }
@@ -186,13 +197,17 @@ impl Backend for CpuBackend<'_> {
         format!("{} threads", self.pool.current_num_threads())
     }
     fn provenance(&self) -> Vec<(&'static str, String)> {
-        match &self.buffers {
-            Some(b) if self.method == crate::method::Method::Bdpt => bidirectional_provenance(
+        let mut out = match &self.buffers {
+            Some(b) if self.method.connects() => bidirectional_provenance(
                 b.shadow_threshold,
                 b.camera_subpaths.iter().filter(|&&n| n > 1).count(),
             ),
             _ => Vec::new(),
+        };
+        if let (Some(b), true) = (&self.buffers, self.method.merges()) {
+            out.extend(merging_provenance(&b.radius));
         }
+        out
     }
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
@@ -200,9 +215,12 @@ impl Backend for CpuBackend<'_> {
         let method = self.method;
         if method.splats() {
             check_film_for(method, film)?;
-            let buffers = self
-                .buffers
-                .get_or_insert_with(|| crate::cpu::LightPassBuffers::new(scene, camera, method));
+            let radius = self
+                .radius
+                .unwrap_or_else(|| crate::merging::MergeRadius::default_for(scene));
+            let buffers = self.buffers.get_or_insert_with(|| {
+                crate::cpu::LightPassBuffers::new(scene, camera, method, radius)
+            });
             self.rays += self.pool.install(|| {
                 crate::cpu::render_iterations(
                     scene, camera, seed, first, count, method, faults, buffers, film,

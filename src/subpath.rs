@@ -17,7 +17,12 @@
 //! vertex connection and merging", SIGGRAPH Asia 2012, and its technical report, the form of
 //! SmallVCM): at every subpath vertex two numbers, d_vcm and d_vc, from which the partial sum
 //! over all strategies on that subpath's side follows with the one or two densities that only
-//! the connection knows. d_vm (merging) is kept for the photon-merging methods and is 0 here.
+//! the connection knows, and a third, d_vm, for the strategies that merge (vertex merging,
+//! `crate::merging`). Merging enters through two constants of the iteration ([`MergeMis`]):
+//! η = π r² N, the ratio of a merge's density to a connection's (the N light subpaths of an
+//! iteration each offer a photon within the disk of area π r², Georgiev et al., eq. 20 of the
+//! report), as vm = η^β and vc = η^−β; without merging both are 0 and the quantities are
+//! BDPT's exactly (every vm and vc term adds or multiplies a 0).
 //!
 //! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
 //! emitters weigh alike in both methods), and where one strategy is much better than the others,
@@ -169,13 +174,42 @@ pub struct LightVertex {
 /// The end of a light subpath's list of vertices (`LightVertex::next`).
 pub const NO_VERTEX: u32 = u32::MAX;
 
+/// The constants that merging adds to the MIS weights of an iteration: `vm` = η^β weighs the
+/// merging strategies against a connection, `vc` = η^−β a connection against merging, with
+/// η = π r² N (see the module comment). Both 0 without merging (BDPT).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MergeMis {
+    pub vm: f32,
+    pub vc: f32,
+}
+
+impl MergeMis {
+    /// No merging: BDPT's weights.
+    pub const NONE: MergeMis = MergeMis { vm: 0.0, vc: 0.0 };
+
+    /// The constants of an iteration that merges within `radius` among `n_light_paths` light
+    /// subpaths, with connections (`connects`, VCM) or without (SPPM, whose merges are its
+    /// only strategy and whose weights are 1).
+    pub fn new(radius: f32, n_light_paths: u32, connects: bool) -> MergeMis {
+        if radius <= 0.0 {
+            return MergeMis::NONE;
+        }
+        let eta = std::f32::consts::PI * radius * radius * n_light_paths as f32;
+        MergeMis {
+            vm: mis(eta),
+            vc: if connects { mis(1.0 / eta) } else { 0.0 },
+        }
+    }
+}
+
 /// Georgiev's recursive MIS quantities of one subpath vertex (see the module comment). For a
 /// vertex x_j of either subpath, with p→(x_j) the area density with which its own subpath
 /// sampled it:
 /// - d_vcm = 1 / p→(x_j)^β, times N^β on the camera subpath's first vertex (the term of the
 ///   strategy that samples x_j from the other side next: light tracing for that vertex);
 /// - d_vc carries, in the same units, the terms of every strategy that samples more of this
-///   subpath's vertices from the other side, built by multiplying density ratios along it.
+///   subpath's vertices from the other side, built by multiplying density ratios along it;
+/// - d_vm the same for the strategies that merge at one of this subpath's earlier vertices.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SubpathMis {
     pub d_vcm: f32,
@@ -202,13 +236,15 @@ impl SubpathMis {
     /// estimation's density of the light point to the emission density (the strategy that
     /// takes the light point from a camera vertex's light sample), d_vc the one for the camera
     /// subpath hitting the emitter (its cosine enters, its area density cancels).
+    /// d_vm: merging at the first hit, against the camera subpath that reaches the emitter.
     #[inline]
-    pub fn light(pdf_area: f32, pdf_dir: f32, cos: f32) -> SubpathMis {
+    pub fn light(pdf_area: f32, pdf_dir: f32, cos: f32, merge: &MergeMis) -> SubpathMis {
         let emission_pdf = pdf_area * pdf_dir;
+        let d_vc = mis(cos / emission_pdf);
         SubpathMis {
             d_vcm: mis(pdf_area / emission_pdf),
-            d_vc: mis(cos / emission_pdf),
-            d_vm: 0.0,
+            d_vc,
+            d_vm: d_vc * merge.vc,
         }
     }
 
@@ -220,15 +256,19 @@ impl SubpathMis {
         self.d_vcm *= mis(dist2);
         self.d_vcm /= mis(cos);
         self.d_vc /= mis(cos);
+        self.d_vm /= mis(cos);
     }
 
     /// After sampling a direction at a non-specular vertex with solid-angle density `pdf` and
     /// cosine `cos_out` toward it; `pdf_rev` is the density of sampling the arriving direction
     /// the other way. Every strategy counted so far gains one more ratio; the one that
-    /// connects at this vertex joins the sum (d_vcm before the update).
+    /// connects at this vertex joins the sum (d_vcm before the update), and with merging the
+    /// one that merges here (vm in d_vc; in d_vm the connection, vc, and the merge itself, 1).
     #[inline]
-    pub fn after_diffuse(&mut self, cos_out: f32, pdf: f32, pdf_rev: f32) {
-        self.d_vc = mis(cos_out / pdf) * (self.d_vc * mis(pdf_rev) + self.d_vcm);
+    pub fn after_diffuse(&mut self, cos_out: f32, pdf: f32, pdf_rev: f32, merge: &MergeMis) {
+        let ratio = mis(cos_out / pdf);
+        self.d_vc = ratio * (self.d_vc * mis(pdf_rev) + self.d_vcm + merge.vm);
+        self.d_vm = ratio * (self.d_vm * mis(pdf_rev) + self.d_vcm * merge.vc + 1.0);
         self.d_vcm = mis(1.0 / pdf);
     }
 
@@ -239,6 +279,7 @@ impl SubpathMis {
     pub fn after_specular(&mut self, cos_out: f32) {
         self.d_vcm = 0.0;
         self.d_vc *= mis(cos_out);
+        self.d_vm *= mis(cos_out);
     }
 }
 
@@ -256,49 +297,57 @@ pub fn weight_emission(camera: &SubpathMis, pdf_area: f32, pdf_dir: f32) -> f32 
 /// vertex's solid-angle density toward the light point and `pdf_light` next-event estimation's
 /// (area density converted to solid angle), `pdf_emit` the light subpath's area density of
 /// the camera vertex (emission toward it), `pdf_rev` the vertex's density toward where its
-/// camera subpath came from.
+/// camera subpath came from. With merging, the light subpath that would start at the light
+/// point may also merge at the camera vertex (`merge.vm`).
 #[inline]
 pub fn weight_next_event(
     camera: &SubpathMis,
+    merge: &MergeMis,
     pdf_bsdf: f32,
     pdf_light: f32,
     pdf_emit: f32,
     pdf_rev: f32,
 ) -> f32 {
     let w_light = mis(pdf_bsdf / pdf_light);
-    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev));
+    let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev) + merge.vm);
     1.0 / (w_light + 1.0 + w_camera)
 }
 
 /// The weight of connecting a camera vertex to a stored light vertex (s ≥ 2, t ≥ 2).
 /// `camera_to_light` is the area density with which the camera vertex's BSDF would sample the
 /// light vertex, `light_to_camera` the reverse, and each `*_rev` the solid-angle density of
-/// the vertex's BSDF toward its own subpath's previous vertex, given the connection.
+/// the vertex's BSDF toward its own subpath's previous vertex, given the connection. With
+/// merging, either subpath may also merge at the other's vertex (`merge.vm` on each side).
+#[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn weight_connection(
     camera: &SubpathMis,
     light: &SubpathMis,
+    merge: &MergeMis,
     camera_to_light: f32,
     camera_rev: f32,
     light_to_camera: f32,
     light_rev: f32,
 ) -> f32 {
-    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev));
-    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev));
+    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev) + merge.vm);
     1.0 / (w_light + 1.0 + w_camera)
 }
 
 /// The weight of connecting a light vertex to the camera (t = 1): `pdf_camera` is the area
 /// density with which the camera would sample the vertex (W |cos| / dist²), shared by N light
-/// subpaths, and `light_rev` the light vertex's density toward its previous vertex.
+/// subpaths, and `light_rev` the light vertex's density toward its previous vertex. With
+/// merging, a camera subpath may also merge at the vertex (`merge.vm`).
 #[inline]
 pub fn weight_to_camera(
     light: &SubpathMis,
+    merge: &MergeMis,
     pdf_camera: f32,
     n_light_paths: f32,
     light_rev: f32,
 ) -> f32 {
-    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev));
+    let w_light =
+        mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
     1.0 / (w_light + 1.0)
 }
 
@@ -308,4 +357,24 @@ pub fn weight_to_camera(
 #[inline]
 pub fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f32) -> f32 {
     1.0 / (1.0 + mis(pdf_camera / (n_light_paths * pdf_area)))
+}
+
+/// The weight of merging a light vertex (a photon) at a camera vertex (vertex merging, Georgiev
+/// et al. 2012, eqs. 37-39 of the report): against the connection at the light vertex
+/// (`merge.vc` on the light vertex's d_vcm) and the strategies that merge or connect earlier on
+/// the light subpath (its d_vm, with `camera_to_light` the camera vertex's solid-angle density
+/// toward the photon's previous vertex), and likewise on the camera side (`camera_rev`, the
+/// camera vertex's density toward its own previous vertex). The photon is taken as if it had
+/// arrived at the camera vertex, which is what merging approximates.
+#[inline]
+pub fn weight_merge(
+    camera: &SubpathMis,
+    light: &SubpathMis,
+    merge: &MergeMis,
+    camera_to_light: f32,
+    camera_rev: f32,
+) -> f32 {
+    let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
+    let w_camera = camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev);
+    1.0 / (w_light + 1.0 + w_camera)
 }

@@ -15,6 +15,10 @@
 //! an emitter seen from its front, s = 1 (next-event estimation) and 2 ≤ s ≤ k − 1 (connections)
 //! where both ends of the connecting edge are diffuse, and s = k (t = 1, splat) where x1 is.
 //!
+//! With merging (VCM), the strategies that merge at each diffuse vertex x1 … x(k−1) join the
+//! sum (`weight_merge`), and every weight carries the iteration's constants (`MergeMis`) for a
+//! merge radius r; the same property holds, and leaving the merges out is rejected.
+//!
 //! Statistic: none needed, the property is exact up to f32 rounding: |Σw − 1| < 1e-4 for every
 //! path. The planted error is one strategy (next-event estimation) left out of the sum, which a
 //! renderer whose weights forgot that strategy in its denominators is equivalent to; it is
@@ -32,7 +36,7 @@ use hexray::light::emitter_pdf_area;
 use hexray::sampling::Sampler;
 use hexray::subpath::{
     camera_subpaths, weight_connection, weight_emission, weight_light_point_to_camera,
-    weight_next_event, weight_to_camera, SubpathMis,
+    weight_merge, weight_next_event, weight_to_camera, MergeMis, SubpathMis,
 };
 use std::f32::consts::FRAC_1_PI;
 
@@ -94,7 +98,13 @@ fn walk(scene: &FlatScene, camera: &Camera, index: u32, length: usize) -> Vec<Ve
 /// Replays a subpath over `points[0..]` (its first point is the camera's eye or the light
 /// point) up to and including vertex `last`, scattering at every vertex before it toward the
 /// next: the quantities the renderer holds at `last`.
-fn replay(start: SubpathMis, points: &[Vertex], eye: Option<Vec3>, last: usize) -> SubpathMis {
+fn replay(
+    start: SubpathMis,
+    points: &[Vertex],
+    eye: Option<Vec3>,
+    last: usize,
+    merge: &MergeMis,
+) -> SubpathMis {
     let mut mis = start;
     let position = |i: usize| {
         if i == 0 {
@@ -110,7 +120,12 @@ fn replay(start: SubpathMis, points: &[Vertex], eye: Option<Vec3>, last: usize) 
             let next = points[j + 1].p;
             let cos_out = cos_to(here, next);
             if here.diffuse {
-                mis.after_diffuse(cos_out, cos_out * FRAC_1_PI, cos_to(here, prev) * FRAC_1_PI);
+                mis.after_diffuse(
+                    cos_out,
+                    cos_out * FRAC_1_PI,
+                    cos_to(here, prev) * FRAC_1_PI,
+                    merge,
+                );
             } else {
                 mis.after_specular(cos_out);
             }
@@ -119,14 +134,18 @@ fn replay(start: SubpathMis, points: &[Vertex], eye: Option<Vec3>, last: usize) 
     mis
 }
 
+/// Strategies are numbered by s for the connections; a merge at x_j is number MERGE + j.
+const MERGE: usize = 1000;
+
 /// The weights of every strategy that can make the path x0 = eye, x1.. = `path` (whose last
 /// vertex is on an emitter's front), as (s, weight); the pixel the path passes traces `n_c`
-/// camera subpaths per iteration.
+/// camera subpaths per iteration; `merge` holds merging's constants (`MergeMis::NONE`: BDPT).
 fn strategy_weights(
     scene: &FlatScene,
     camera: &Camera,
     path: &[Vertex],
     n_c: f32,
+    merge: &MergeMis,
 ) -> Vec<(usize, f32)> {
     let n_paths = (SIZE * SIZE) as f32;
     let eye = Vec3::from(camera.eye);
@@ -154,7 +173,7 @@ fn strategy_weights(
     };
     let light_start = |toward: Vec3| {
         let cos = cos_to(&ys[0], toward);
-        SubpathMis::light(pdf_area, cos * FRAC_1_PI, cos)
+        SubpathMis::light(pdf_area, cos * FRAC_1_PI, cos, merge)
     };
     // The camera's area density of x1, n_c subpaths' worth.
     let pdf_camera_x1 = {
@@ -164,7 +183,7 @@ fn strategy_weights(
     let mut weights = Vec::new();
 
     // s = 0: the camera subpath x0..xk hits the emitter.
-    let at_light = replay(camera_start, &xs, Some(eye), k);
+    let at_light = replay(camera_start, &xs, Some(eye), k, merge);
     let cos_l = cos_to(&xs[k], xs[k - 1].p);
     weights.push((0, weight_emission(&at_light, pdf_area, cos_l * FRAC_1_PI)));
 
@@ -176,12 +195,13 @@ fn strategy_weights(
             weight_light_point_to_camera(pdf_camera_x1, n_paths, pdf_area),
         ));
     } else if xs[k - 1].diffuse {
-        let mis = replay(camera_start, &xs, Some(eye), k - 1);
+        let mis = replay(camera_start, &xs, Some(eye), k - 1, merge);
         let (x, l) = (&xs[k - 1], &xs[k]);
         let dist2 = (l.p - x.p).length_squared();
         let (cos_s, cos_l) = (cos_to(x, l.p), cos_to(l, x.p));
         let w = weight_next_event(
             &mis,
+            merge,
             cos_s * FRAC_1_PI,
             pdf_area * dist2 / cos_l,
             cos_l * FRAC_1_PI * cos_s / dist2,
@@ -197,13 +217,14 @@ fn strategy_weights(
         if !c.diffuse || !l.diffuse {
             continue;
         }
-        let camera_mis = replay(camera_start, &xs, Some(eye), t - 1);
-        let light_mis = replay(light_start(ys[1].p), &ys, None, s - 1);
+        let camera_mis = replay(camera_start, &xs, Some(eye), t - 1, merge);
+        let light_mis = replay(light_start(ys[1].p), &ys, None, s - 1, merge);
         let dist2 = (l.p - c.p).length_squared();
         let (cos_c, cos_lv) = (cos_to(c, l.p), cos_to(l, c.p));
         let w = weight_connection(
             &camera_mis,
             &light_mis,
+            merge,
             cos_c * FRAC_1_PI * cos_lv / dist2,
             cos_to(c, xs[t - 2].p) * FRAC_1_PI,
             cos_lv * FRAC_1_PI * cos_c / dist2,
@@ -214,14 +235,35 @@ fn strategy_weights(
 
     // s = k (t = 1): light vertex y(k-1) = x1 splatted to the camera (k >= 2).
     if k >= 2 && xs[1].diffuse {
-        let light_mis = replay(light_start(ys[1].p), &ys, None, k - 1);
+        let light_mis = replay(light_start(ys[1].p), &ys, None, k - 1, merge);
         let w = weight_to_camera(
             &light_mis,
+            merge,
             pdf_camera_x1,
             n_paths,
             cos_to(&xs[1], xs[2].p) * FRAC_1_PI,
         );
         weights.push((k, w));
+    }
+
+    // Merges (VCM): at a diffuse x_j, 1 <= j <= k - 1, the camera subpath x0..x_j meets the
+    // light subpath y0..y(k-j) = x_j, whose previous vertex is x(j+1).
+    if *merge != MergeMis::NONE {
+        for j in 1..k {
+            if !xs[j].diffuse {
+                continue;
+            }
+            let camera_mis = replay(camera_start, &xs, Some(eye), j, merge);
+            let light_mis = replay(light_start(ys[1].p), &ys, None, k - j, merge);
+            let w = weight_merge(
+                &camera_mis,
+                &light_mis,
+                merge,
+                cos_to(&xs[j], xs[j + 1].p) * FRAC_1_PI,
+                cos_to(&xs[j], xs[j - 1].p) * FRAC_1_PI,
+            );
+            weights.push((MERGE + j, w));
+        }
     }
     weights
 }
@@ -236,6 +278,23 @@ fn sums(
     length: usize,
     left_out: Option<usize>,
 ) -> (usize, usize, bool, f32) {
+    sums_with(rel, walks, length, left_out, 0.0)
+}
+
+/// [`sums`] with merging within `radius` times the scene's bounding-sphere radius (0: BDPT);
+/// `left_out` MERGE leaves every merge out.
+fn sums_with(
+    rel: &str,
+    walks: u32,
+    length: usize,
+    left_out: Option<usize>,
+    radius: f32,
+) -> (usize, usize, bool, f32) {
+    let merge = MergeMis::new(
+        radius * hexray::merging::scene_radius(&load(rel).1),
+        SIZE * SIZE,
+        true,
+    );
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
     let n_c = camera_subpaths(&flat, &camera);
@@ -248,9 +307,12 @@ fn sums(
             if path[end - 1].emitter.is_none() {
                 continue;
             }
-            let total: f32 = strategy_weights(&flat, &camera, path, n_c)
+            let total: f32 = strategy_weights(&flat, &camera, path, n_c, &merge)
                 .iter()
-                .filter(|(s, _)| Some(*s) != left_out)
+                .filter(|(s, _)| match left_out {
+                    Some(MERGE) => *s < MERGE,
+                    other => Some(*s) != other,
+                })
                 .map(|(_, w)| w)
                 .sum();
             paths += 1;
@@ -310,5 +372,39 @@ fn mis_weight_check_rejects_a_missing_strategy() {
     assert!(
         worst > 1e-2,
         "worst |Σw − 1| = {worst:e} with a strategy missing"
+    );
+}
+
+/// VCM: with merges at a radius of 0.02 of the scene's bounding-sphere radius (0.22 in
+/// tncg15_room, where the merges then carry up to 90 % of some paths' weight), every strategy's
+/// weight, connections and merges, sums to 1.
+#[test]
+fn mis_weights_with_merging_sum_to_one_on_tncg15_rooms_paths() {
+    let (paths, _, specular, worst) = sums_with("scenes/tncg15_room.json", 6000, 12, None, 0.02);
+    assert!(paths > 150 && specular, "too few paths");
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+#[test]
+fn mis_weights_with_merging_sum_to_one_on_glass_rooms_paths() {
+    let (paths, _, specular, worst) = sums_with("scenes/glass_room.json", 6000, 12, None, 0.02);
+    assert!(paths > 150 && specular, "too few paths");
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+#[test]
+fn mis_weights_with_merging_sum_to_one_on_paths_of_sixty_bounces() {
+    let (_, longest, _, worst) = sums_with("scenes/furnace/diffuse_0_95.json", 100, 60, None, 0.02);
+    assert!(longest == 60);
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+/// With merging on, the connections' weights alone fall short of 1: the merges carry the rest.
+#[test]
+fn mis_weight_check_rejects_missing_merges() {
+    let (_, _, _, worst) = sums_with("scenes/tncg15_room.json", 2000, 12, Some(MERGE), 0.02);
+    assert!(
+        worst > 1e-2,
+        "worst |Σw − 1| = {worst:e} without the merges"
     );
 }

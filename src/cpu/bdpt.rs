@@ -8,6 +8,15 @@
 //! The visibility rays of next-event estimation and of the connections are rouletted by their
 //! contribution (`subpath::shadow_survival`).
 //!
+//! The same pass, with photons, is the camera pass of the merging methods. VCM (Georgiev et al.
+//! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the
+//! iteration (of any pixel's light subpath) within the radius r, found in the hash grid
+//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`). With
+//! the radius 0 it is BDPT, bit for bit. SPPM is the special case without connections
+//! (Georgiev's PPM, as Knaus and Zwicker's probabilistic PPM): the camera subpath follows
+//! mirrors and glass to its first diffuse vertex, merges there with weight 1 and stops; it
+//! keeps the emission it meets on the way, the only paths merging cannot make.
+//!
 //! `shaders/bdpt.wgsl` is this function again, with the same names, steps and step comments.
 //!
 //! Light subpaths are stored whole, however long: on the CPU as a slice per subpath, on the GPU
@@ -21,10 +30,12 @@ use crate::cpu::light_path::{is_diffuse, max_path_edges};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
+use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::sampling::{dim_bsdf, dim_connection, dim_light, Sampler, DIM_CAMERA};
 use crate::subpath::{
-    shadow_survival, weight_connection, weight_emission, weight_next_event, LightVertex, SubpathMis,
+    shadow_survival, weight_connection, weight_emission, weight_merge, weight_next_event,
+    LightVertex, MergeMis, SubpathMis,
 };
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -38,6 +49,22 @@ pub struct CameraPass<'a> {
     pub faults: Faults,
     /// τ of the Russian roulette on visibility rays (`subpath::shadow_threshold`).
     pub shadow_threshold: f32,
+    /// Whether to take BDPT's strategies: emission weighed by MIS, next-event estimation and
+    /// the connections (BDPT, VCM; not SPPM).
+    pub connects: bool,
+    /// Merging's constants in the MIS weights (`MergeMis::NONE` for BDPT).
+    pub merge: MergeMis,
+    /// The iteration's photons, for the merging methods.
+    pub photons: Option<Photons<'a>>,
+}
+
+/// What merging needs: every light vertex of the iteration, their hash grid, and the kernel's
+/// normalisation 1 / (π r² N).
+#[derive(Clone, Copy)]
+pub struct Photons<'a> {
+    pub vertices: &'a [LightVertex],
+    pub grid: &'a HashGrid,
+    pub normalization: f32,
 }
 
 impl CameraPass<'_> {
@@ -123,10 +150,15 @@ impl CameraPass<'_> {
             let depth = bounce + 1;
 
             // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
-            // light point taken by next-event estimation or by a light subpath.
+            // light point taken by next-event estimation or by a light subpath (SPPM meets it
+            // only through mirrors and glass, where nothing else can: weight 1).
             if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
                 let pdf_area = emitter_pdf_area(scene, hit.prim);
-                let w = weight_emission(&mis, pdf_area, cos_o * FRAC_1_PI);
+                let w = if self.connects {
+                    weight_emission(&mis, pdf_area, cos_o * FRAC_1_PI)
+                } else {
+                    1.0
+                };
                 radiance += throughput * Vec3::from(material.emission) * w;
             }
 
@@ -152,10 +184,18 @@ impl CameraPass<'_> {
                 let wi = to_light / dist2.sqrt();
                 let cos_l = -ls.n.dot(wi);
                 let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-                if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth < max_edges {
+                let connects = self.connects && depth < max_edges;
+                if connects && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                     let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                     let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
-                    let w = weight_next_event(&mis, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
+                    let w = weight_next_event(
+                        &mis,
+                        &self.merge,
+                        bsdf.pdf,
+                        pdf_light,
+                        pdf_emit,
+                        pdf_rev,
+                    );
                     let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                     let light = (ls.p, ls.p_err, ls.n);
                     radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
@@ -164,7 +204,7 @@ impl CameraPass<'_> {
                 // Step 5 - connections (s ≥ 2): to each vertex of this pixel's light subpath,
                 // one shadow ray each; the contribution is β f_c G f_l α, weighted against
                 // every other strategy on both sides.
-                for (i, v) in light_path.iter().enumerate() {
+                for (i, v) in light_path.iter().enumerate().filter(|_| self.connects) {
                     if depth + 1 + v.length > max_edges {
                         continue;
                     }
@@ -188,6 +228,7 @@ impl CameraPass<'_> {
                     let w = weight_connection(
                         &mis,
                         &light_mis,
+                        &self.merge,
                         camera_bsdf.pdf * light_bsdf.cos_i / dist2,
                         camera_bsdf.pdf_rev,
                         light_bsdf.pdf * camera_bsdf.cos_i / dist2,
@@ -202,9 +243,53 @@ impl CameraPass<'_> {
                     let u = sampler.draw4(dim_connection(bounce, i as u32))[i % 4];
                     radiance += value * self.visibility(here, there, value, u, rays);
                 }
+
+                // Step 6 - merging (VCM, SPPM): every photon of the iteration within r on the
+                // same side of the surface, counted with the disk kernel 1 / (π r² N) times
+                // f α, weighted against every other strategy (SPPM: 1). The photon is taken
+                // as arrived here: Lambert's f = ρ/π, and the densities of its direction
+                // use its own normal's cosine, which stays positive across the disk.
+                if let Some(photons) = &self.photons {
+                    let mut gathered = Vec3::ZERO;
+                    photons.grid.query(
+                        hit.p,
+                        |i| Vec3::from(photons.vertices[i as usize].p),
+                        |i| {
+                            let v = &photons.vertices[i as usize];
+                            let n_light = Vec3::from(v.n);
+                            if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
+                                return;
+                            }
+                            let w = if self.connects {
+                                let light_mis = SubpathMis {
+                                    d_vcm: v.d_vcm,
+                                    d_vc: v.d_vc,
+                                    d_vm: v.d_vm,
+                                };
+                                let cos_light = n_light.dot(Vec3::from(v.wo));
+                                weight_merge(
+                                    &mis,
+                                    &light_mis,
+                                    &self.merge,
+                                    cos_light * FRAC_1_PI,
+                                    pdf_rev,
+                                )
+                            } else {
+                                1.0
+                            };
+                            gathered += Vec3::from(v.throughput) * w;
+                        },
+                    );
+                    radiance +=
+                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization);
+                    if !self.connects {
+                        // SPPM merges at the first diffuse vertex only.
+                        break;
+                    }
+                }
             }
 
-            // Step 6 - scattering: sample the BSDF for the next direction; the throughput takes
+            // Step 7 - scattering: sample the BSDF for the next direction; the throughput takes
             // the sample's weight and the quantities its densities.
             let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
             let cos_out = hit.n.dot(bs.wi).abs();
@@ -213,7 +298,7 @@ impl CameraPass<'_> {
                 throughput *= faults.specular_scale;
                 mis.after_specular(cos_out);
             } else {
-                mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * FRAC_1_PI);
+                mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * FRAC_1_PI, &self.merge);
             }
             eta_scale *= bs.eta2;
             if throughput.max_element() <= 0.0 || depth >= max_edges {
@@ -224,7 +309,7 @@ impl CameraPass<'_> {
                 d: bs.wi,
             };
 
-            // Step 7 - Russian roulette, as in path.rs: from bounce RR_START_BOUNCE on,
+            // Step 8 - Russian roulette, as in path.rs: from bounce RR_START_BOUNCE on,
             // continue with probability q = min(max(throughput) · eta_scale, 0.95) and divide
             // by q.
             if bounce >= RR_START_BOUNCE {

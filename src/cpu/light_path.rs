@@ -9,8 +9,9 @@
 //! Light tracing alone (`--method light`) is this pass with every splat weighted 1: an unbiased
 //! estimate of everything the camera sees on non-specular surfaces, and nothing of what it sees
 //! through a mirror or glass (a light subpath can never be connected to the camera through a
-//! specular bounce; those surfaces stay black). For BDPT the splats carry their MIS weights
-//! against every other strategy (`crate::subpath`).
+//! specular bounce; those surfaces stay black). For BDPT and VCM the splats carry their MIS
+//! weights against every other strategy (`crate::subpath`), and the vertices are stored for
+//! the camera pass to connect to and (VCM, SPPM) merge with; SPPM only stores them.
 //!
 //! The light subpath carries flux (importance transport): it starts with α = Le / p_A at the
 //! light point, and each bounce multiplies it by the adjoint BSDF's f · |cos| / pdf
@@ -29,8 +30,8 @@ use crate::light::sample_emission;
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
-    shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex, SubpathMis,
-    NO_VERTEX,
+    shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex, MergeMis,
+    SubpathMis, NO_VERTEX,
 };
 use glam::Vec3;
 
@@ -47,8 +48,10 @@ pub fn is_diffuse(material: &Material) -> bool {
 pub enum LightPassMode {
     /// Light tracing: splats weighted 1, nothing stored.
     LightTracing,
-    /// BDPT: splats weighted by MIS, diffuse vertices stored.
+    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored.
     Bidirectional,
+    /// SPPM: diffuse vertices stored as photons, nothing splatted.
+    PhotonMapping,
 }
 
 /// Everything one light pass shares.
@@ -63,6 +66,9 @@ pub struct LightPass<'a> {
     pub camera_subpaths: &'a [u32],
     /// τ of the Russian roulette on the splats' visibility rays (BDPT; 0 for light tracing).
     pub shadow_threshold: f32,
+    /// Merging's constants in the MIS weights of this iteration (`MergeMis::NONE` but for VCM
+    /// and SPPM).
+    pub merge: MergeMis,
 }
 
 /// The longest full path (in edges) that the `max_bounces` fault lets through: the camera ray,
@@ -119,8 +125,8 @@ impl LightPass<'_> {
     }
 
     /// Traces the light subpath of `sampler`: splats its connections to the camera into
-    /// `splats` and, for BDPT, appends its diffuse vertices to `vertices`, in order. Returns
-    /// the number of rays traced.
+    /// `splats` (not for SPPM) and, but for light tracing, appends its diffuse vertices to
+    /// `vertices`, in order. Returns the number of rays traced.
     pub fn trace(
         &self,
         sampler: &Sampler,
@@ -129,7 +135,8 @@ impl LightPass<'_> {
     ) -> u64 {
         let scene = self.scene;
         let n_paths = self.n_light_paths as f32;
-        let bidirectional = self.mode == LightPassMode::Bidirectional;
+        let stores = self.mode != LightPassMode::LightTracing;
+        let splats_to_camera = self.mode != LightPassMode::PhotonMapping;
         let mut rays = 0u64;
 
         // Step 1 - emission: an emitter point chosen by power, uniformly on its area, and a
@@ -144,7 +151,7 @@ impl LightPass<'_> {
         // Step 2 - the light point seen by the camera (s = 1, t = 1): Le / p_A times the
         // importance and the geometry term toward the eye, against the camera subpaths that
         // hit the emitter there (s = 0).
-        if let Some(r) = self.camera.raster(light.p) {
+        if let Some(r) = self.camera.raster(light.p).filter(|_| splats_to_camera) {
             let cos_l = -light.n.dot(r.dir);
             if cos_l > 0.0 && 1 <= max_path_edges(&self.faults) {
                 let pixel = (r.y * self.camera.width + r.x) as usize;
@@ -153,7 +160,7 @@ impl LightPass<'_> {
                 let g_camera = self.importance(&r) * cos_l / r.dist2;
                 let w = match self.mode {
                     LightPassMode::LightTracing => 1.0,
-                    LightPassMode::Bidirectional => weight_light_point_to_camera(
+                    _ => weight_light_point_to_camera(
                         g_camera * self.camera_subpaths[pixel] as f32,
                         n_paths,
                         light.pdf_area,
@@ -169,7 +176,8 @@ impl LightPass<'_> {
         // The product of the BSDF weights alone, which Russian roulette looks at (the emitted
         // radiance over densities in `throughput` is no survival probability).
         let mut scattered = Vec3::ONE;
-        let mut mis = SubpathMis::light(light.pdf_area, emission.pdf_dir, emission.cos);
+        let mut mis =
+            SubpathMis::light(light.pdf_area, emission.pdf_dir, emission.cos, &self.merge);
         let mut ray = Ray {
             o: offset_ray_origin(light.p, light.p_err, light.n, emission.dir),
             d: emission.dir,
@@ -201,8 +209,9 @@ impl LightPass<'_> {
                 let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
                 let albedo = Vec3::from(material.color);
 
-                // Step 4 - store the vertex for the camera subpaths (BDPT).
-                if bidirectional {
+                // Step 4 - store the vertex for the camera subpaths to connect to and merge
+                // with (BDPT, VCM, SPPM).
+                if stores {
                     vertices.push(LightVertex {
                         p: hit.p.into(),
                         p_err: hit.p_err.max_element(),
@@ -221,15 +230,16 @@ impl LightPass<'_> {
 
                 // Step 5 - connect to the camera (t = 1): splat α f W |cos| / dist² / N into
                 // the pixel that sees the vertex.
-                if let Some(r) = self.camera.raster(hit.p) {
+                if let Some(r) = self.camera.raster(hit.p).filter(|_| splats_to_camera) {
                     let bsdf = eval_diffuse(albedo, n_facing, wo, -r.dir);
                     if bsdf.pdf > 0.0 && length < max_path_edges(&self.faults) {
                         let pixel = (r.y * self.camera.width + r.x) as usize;
                         let g_camera = self.importance(&r) * bsdf.cos_i / r.dist2;
                         let w = match self.mode {
                             LightPassMode::LightTracing => 1.0,
-                            LightPassMode::Bidirectional => weight_to_camera(
+                            _ => weight_to_camera(
                                 &mis,
+                                &self.merge,
                                 g_camera * self.camera_subpaths[pixel] as f32,
                                 n_paths,
                                 bsdf.pdf_rev,
@@ -254,7 +264,12 @@ impl LightPass<'_> {
             } else {
                 scattered *= bs.weight;
                 throughput *= bs.weight;
-                mis.after_diffuse(cos_out, bs.pdf, cos_o.abs() * std::f32::consts::FRAC_1_PI);
+                mis.after_diffuse(
+                    cos_out,
+                    bs.pdf,
+                    cos_o.abs() * std::f32::consts::FRAC_1_PI,
+                    &self.merge,
+                );
             }
             if scattered.max_element() <= 0.0 {
                 break;

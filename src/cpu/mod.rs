@@ -1,5 +1,5 @@
 //! The CPU reference backend: the integrators, run with rayon over image tiles (path tracing)
-//! or over iterations of a light pass and a camera pass (light tracing, BDPT).
+//! or over iterations of a light pass and a camera pass (light tracing, BDPT, SPPM, VCM).
 
 pub mod bdpt;
 pub mod light_path;
@@ -10,10 +10,12 @@ pub use path::{trace_path, Faults};
 use crate::camera::Camera;
 use crate::film::{Film, PixelStats};
 use crate::flat::FlatScene;
+use crate::hash_grid::HashGrid;
+use crate::merging::MergeRadius;
 use crate::method::Method;
 use crate::sampling::Sampler;
 use crate::splat::Splats;
-use crate::subpath::LightVertex;
+use crate::subpath::{LightVertex, MergeMis};
 use light_path::{LightPass, LightPassMode};
 use rayon::prelude::*;
 
@@ -87,14 +89,18 @@ type TileValues = (Vec<(usize, Option<glam::Vec3>)>, u64);
 /// Light subpaths per parallel task of the light pass.
 const LIGHT_CHUNK: u32 = 256;
 
-/// What the iterations of light tracing and BDPT share: the splats and (BDPT) the light
-/// subpaths' stored vertices of the current iteration, subpath i's at
+/// What the iterations of the light-subpath methods share: the splats and (but for light
+/// tracing) the light subpaths' stored vertices of the current iteration, subpath i's at
 /// `vertices[starts[i]..starts[i + 1]]`, kept so that nothing is allocated per iteration but
-/// the chunks' lists; and what is fixed for the scene and camera, n_c per pixel and τ.
+/// the chunks' lists, and their hash grid (merging); and what is fixed for the scene and
+/// camera, n_c per pixel, τ and the merge radius's schedule.
 pub struct LightPassBuffers {
     pub splats: Splats,
     pub vertices: Vec<LightVertex>,
     pub starts: Vec<u32>,
+    pub grid: HashGrid,
+    /// The merge radius's schedule (SPPM, VCM).
+    pub radius: MergeRadius,
     /// n_c per pixel (`subpath::camera_subpaths`).
     pub camera_subpaths: Vec<u32>,
     /// τ (`subpath::shadow_threshold`; BDPT only, 0 for light tracing).
@@ -102,18 +108,25 @@ pub struct LightPassBuffers {
 }
 
 impl LightPassBuffers {
-    pub fn new(scene: &FlatScene, camera: &Camera, method: Method) -> LightPassBuffers {
-        let bdpt = method == Method::Bdpt;
+    pub fn new(
+        scene: &FlatScene,
+        camera: &Camera,
+        method: Method,
+        radius: MergeRadius,
+    ) -> LightPassBuffers {
+        let bdpt = method != Method::Light;
         LightPassBuffers {
             splats: Splats::new(camera.width, camera.height),
             vertices: Vec::new(),
             starts: Vec::new(),
+            grid: HashGrid::default(),
+            radius,
             camera_subpaths: if bdpt {
                 crate::subpath::camera_subpaths(scene, camera)
             } else {
                 vec![1; camera.width as usize * camera.height as usize]
             },
-            shadow_threshold: if bdpt {
+            shadow_threshold: if method.connects() {
                 crate::subpath::shadow_threshold(scene, camera)
             } else {
                 0.0
@@ -122,13 +135,15 @@ impl LightPassBuffers {
     }
 }
 
-/// Adds iterations `first..first + count` of light tracing or BDPT to `film`. Each iteration
-/// traces one light subpath per pixel (light pass, splatting into `buffers.splats`), then one
-/// camera subpath per pixel (BDPT only) that connects to the light subpath of the same index;
-/// each pixel's value for the iteration, its camera subpath's radiance plus the splats it
-/// received, is one sample of that pixel, and the iteration's image mean one sample of the
-/// image mean (batch means, `film.rs`). Splat sums do not depend on thread order, so images
-/// are bit-identical for any thread count. Returns the number of rays traced.
+/// Adds iterations `first..first + count` of light tracing, BDPT, SPPM or VCM to `film`. Each
+/// iteration traces one light subpath per pixel (light pass, splatting into `buffers.splats`),
+/// builds the hash grid of their vertices (merging, with iteration i's radius), then one
+/// camera subpath per pixel (not for light tracing) that connects to the light subpath of the
+/// same index and merges with every pixel's; each pixel's value for the iteration, its camera
+/// subpath's radiance plus the splats it received, is one sample of that pixel, and the
+/// iteration's image mean one sample of the image mean (batch means, `film.rs`). Splat sums do
+/// not depend on thread order, so images are bit-identical for any thread count. Returns the
+/// number of rays traced.
 #[allow(clippy::too_many_arguments)]
 pub fn render_iterations(
     scene: &FlatScene,
@@ -144,27 +159,34 @@ pub fn render_iterations(
     assert!(method.splats(), "{method} does not trace light subpaths");
     let (w, h) = (film.width, film.height);
     let n_paths = w * h;
-    let pass = LightPass {
-        scene,
-        camera,
-        n_light_paths: n_paths,
-        mode: match method {
-            Method::Bdpt => LightPassMode::Bidirectional,
-            _ => LightPassMode::LightTracing,
-        },
-        faults,
-        camera_subpaths: &buffers.camera_subpaths,
-        shadow_threshold: buffers.shadow_threshold,
-    };
-    let camera_pass = bdpt::CameraPass {
-        scene,
-        camera,
-        n_light_paths: n_paths,
-        faults,
-        shadow_threshold: buffers.shadow_threshold,
+    let mode = match method {
+        Method::Light => LightPassMode::LightTracing,
+        Method::Sppm => LightPassMode::PhotonMapping,
+        _ => LightPassMode::Bidirectional,
     };
     let mut rays = 0u64;
     for s in first..first + count {
+        // Merging's radius this iteration, and its constants in the MIS weights.
+        let radius = if method.merges() {
+            buffers.radius.at(s)
+        } else {
+            0.0
+        };
+        let merge = if method.merges() {
+            MergeMis::new(radius, n_paths, method.connects())
+        } else {
+            MergeMis::NONE
+        };
+        let pass = LightPass {
+            scene,
+            camera,
+            n_light_paths: n_paths,
+            mode,
+            faults,
+            camera_subpaths: &buffers.camera_subpaths,
+            shadow_threshold: buffers.shadow_threshold,
+            merge,
+        };
         // The light pass: every light subpath, in chunks; the chunks' vertices are joined in
         // subpath order.
         let chunks: Vec<(Vec<LightVertex>, Vec<u32>, u64)> = (0..n_paths.div_ceil(LIGHT_CHUNK))
@@ -190,8 +212,32 @@ pub fn render_iterations(
             rays += chunk_rays;
         }
 
-        // The camera pass: each pixel's camera subpath (BDPT), plus its splats.
+        // The hash grid of the iteration's light vertices (merging).
+        if radius > 0.0 {
+            buffers.grid = HashGrid::build(buffers.vertices.iter().map(|v| v.p.into()), radius);
+        }
+
+        // The camera pass: each pixel's camera subpaths, plus its splats.
         let buffers = &*buffers;
+        let camera_pass = bdpt::CameraPass {
+            scene,
+            camera,
+            n_light_paths: n_paths,
+            faults,
+            shadow_threshold: buffers.shadow_threshold,
+            connects: method.connects(),
+            merge,
+            photons: (radius > 0.0).then(|| bdpt::Photons {
+                vertices: &buffers.vertices,
+                grid: &buffers.grid,
+                // The disk kernel 1 / (π r²), shared by N light subpaths.
+                normalization: if faults.merge_kernel_ball {
+                    1.0 / (4.0 / 3.0 * std::f32::consts::PI * radius.powi(3) * n_paths as f32)
+                } else {
+                    1.0 / (std::f32::consts::PI * radius * radius * n_paths as f32)
+                },
+            }),
+        };
         let tiles_x = w.div_ceil(TILE);
         let results: Vec<TileValues> = (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
@@ -203,7 +249,7 @@ pub fn render_iterations(
                     for x in tx * TILE..((tx + 1) * TILE).min(w) {
                         let index = (y * w + x) as usize;
                         let mut value = glam::Vec3::ZERO;
-                        if method == Method::Bdpt {
+                        if method != Method::Light {
                             // The pixel's n_c camera subpaths, averaged; the k-th draws the
                             // streams of pixel index + k · N (a camera subpath's own blocks
                             // there: light subpaths stop at N).

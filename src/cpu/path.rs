@@ -44,6 +44,9 @@ pub struct Faults {
     /// Light tracing and BDPT: splats with a camera importance that lacks one cos θ factor,
     /// 1 / (A_pix cos²θ) (false when correct).
     pub importance_missing_cos: bool,
+    /// SPPM and VCM: merges counted with the kernel of the 3-D ball, 1 / (4/3 π r³), instead
+    /// of the disk's 1 / (π r²) (false when correct).
+    pub merge_kernel_ball: bool,
 }
 
 impl Faults {
@@ -52,6 +55,7 @@ impl Faults {
         max_bounces: u32::MAX,
         grey_indirect: false,
         importance_missing_cos: false,
+        merge_kernel_ball: false,
     };
 }
 

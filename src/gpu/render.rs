@@ -276,6 +276,9 @@ impl GpuRenderer {
                 device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
             },
         };
+        if method.merges() {
+            bail!("--method {method} runs on the CPU backend only so far");
+        }
         let layout = bind_group_layout(device, residency);
         let (pipeline, bidirectional) = if method.splats() {
             let b = Bidirectional::new(device, &module, &layout, method, scene, &camera)?;
@@ -306,6 +309,8 @@ impl GpuRenderer {
                 Method::Path => 0,
                 Method::Light => 1,
                 Method::Bdpt => 2,
+                Method::Sppm => 3,
+                Method::Vcm => 4,
             },
             n_light_paths: width * height,
             slot: 0,

@@ -76,6 +76,36 @@ pub fn render_cpu_method(
     render_cpu_flat(&scene, &flat, width, height, spp, seed, method, 1, faults)
 }
 
+/// [`render_cpu_method`] for a merging method (sppm, vcm) with the radius schedule `radius`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_cpu_merging(
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    radius: hexray::merging::MergeRadius,
+    faults: Faults,
+) -> Film {
+    let (scene, flat) = load(rel);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut film = Film::new(width, height);
+    let mut buffers = LightPassBuffers::new(&flat, &camera, method, radius);
+    render_iterations(
+        &flat,
+        &camera,
+        seed,
+        0,
+        spp,
+        method,
+        faults,
+        &mut buffers,
+        &mut film,
+    );
+    film
+}
+
 /// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
 /// the loaded scene's camera.
 #[allow(clippy::too_many_arguments)]
@@ -93,7 +123,12 @@ fn render_cpu_flat(
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     if method.splats() {
-        let mut buffers = LightPassBuffers::new(flat, &camera, method);
+        let mut buffers = LightPassBuffers::new(
+            flat,
+            &camera,
+            method,
+            hexray::merging::MergeRadius::default_for(flat),
+        );
         render_iterations(
             flat,
             &camera,

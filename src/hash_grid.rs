@@ -1,0 +1,209 @@
+//! A hashed uniform grid over an iteration's light vertices, for the range queries of photon
+//! merging (`--method sppm|vcm`): every vertex within the merge radius r of a point.
+//!
+//! Cells are cubes of side 2r, so the ball of radius r about any point lies in the 2x2x2 block
+//! of cells nearest to it (per axis, the point's cell and the neighbour on the side of the
+//! nearer face). Cells are hashed into a power-of-two number of buckets, at least as many as
+//! vertices, and the vertices are sorted by bucket with a counting sort: count per bucket, an
+//! exclusive prefix sum, a scatter in vertex order. So the layout is a function of the vertices
+//! alone: bucket b holds `indices[starts[b]..starts[b + 1]]`, in increasing vertex index.
+//! `shaders/hash_grid.wgsl` builds the same arrays with atomics and a scan dispatch and then
+//! sorts each bucket, so both backends hold the same grid bit for bit.
+//!
+//! Two of the eight cells may hash to one bucket; a query visits each bucket once, and tests
+//! every vertex in it against the exact distance, so collisions cost time, never correctness.
+
+use glam::{IVec3, Vec3};
+
+/// Cell coordinates are clamped to ±2^30 before hashing, so a radius tiny against the scene
+/// cannot overflow an i32 (the same clamp on both backends).
+const CELL_LIMIT: f32 = 1_073_741_824.0;
+
+/// The hash of a cell, SmallVCM's and Teschner et al.'s (2003) three large primes, in wrapping
+/// u32 arithmetic (as WGSL computes it).
+#[inline]
+pub fn hash_cell(c: IVec3) -> u32 {
+    (c.x as u32).wrapping_mul(73_856_093)
+        ^ (c.y as u32).wrapping_mul(19_349_663)
+        ^ (c.z as u32).wrapping_mul(83_492_791)
+}
+
+/// The grid's constants, in the layout of `shaders/hash_grid.wgsl` (`GridParams`).
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GridParams {
+    /// The smallest corner of the vertices' bounding box.
+    pub min: [f32; 3],
+    /// 1 / cell size = 1 / (2 r).
+    pub inv_cell: f32,
+    /// Buckets - 1 (a power of two minus one).
+    pub mask: u32,
+    /// Vertices in the grid.
+    pub count: u32,
+    /// r², the query's squared radius.
+    pub radius2: f32,
+    pub pad: u32,
+}
+
+impl GridParams {
+    /// The constants for `count` vertices with bounding-box corner `min`, merged within
+    /// `radius`.
+    pub fn new(min: Vec3, count: u32, radius: f32) -> GridParams {
+        GridParams {
+            min: min.into(),
+            inv_cell: 0.5 / radius,
+            mask: count.max(1).next_power_of_two() - 1,
+            count,
+            radius2: radius * radius,
+            pad: 0,
+        }
+    }
+
+    pub fn buckets(&self) -> usize {
+        self.mask as usize + 1
+    }
+
+    /// The point's position in cell units.
+    #[inline]
+    fn cell_units(&self, p: Vec3) -> Vec3 {
+        ((p - Vec3::from(self.min)) * self.inv_cell)
+            .clamp(Vec3::splat(-CELL_LIMIT), Vec3::splat(CELL_LIMIT))
+    }
+
+    /// The cell holding `p`.
+    #[inline]
+    pub fn cell(&self, p: Vec3) -> IVec3 {
+        self.cell_units(p).floor().as_ivec3()
+    }
+
+    /// The bucket of the cell holding `p`.
+    #[inline]
+    pub fn bucket(&self, p: Vec3) -> u32 {
+        hash_cell(self.cell(p)) & self.mask
+    }
+
+    /// The buckets of the 2x2x2 cells that hold every point within r of `p`, each once: the
+    /// first `n` entries of the array.
+    #[inline]
+    pub fn query_buckets(&self, p: Vec3) -> ([u32; 8], usize) {
+        let u = self.cell_units(p);
+        let c = u.floor();
+        let f = u - c;
+        let c = c.as_ivec3();
+        // Per axis, the neighbour on the side of the nearer face.
+        let step = IVec3::new(
+            if f.x < 0.5 { -1 } else { 1 },
+            if f.y < 0.5 { -1 } else { 1 },
+            if f.z < 0.5 { -1 } else { 1 },
+        );
+        let mut out = [0u32; 8];
+        let mut n = 0;
+        for k in 0..8 {
+            let cell = c + IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * step;
+            let b = hash_cell(cell) & self.mask;
+            if !out[..n].contains(&b) {
+                out[n] = b;
+                n += 1;
+            }
+        }
+        (out, n)
+    }
+}
+
+/// The grid: constants, bucket starts (buckets + 1 entries) and vertex indices by bucket.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HashGrid {
+    pub params: GridParams,
+    pub starts: Vec<u32>,
+    pub indices: Vec<u32>,
+}
+
+impl Default for GridParams {
+    fn default() -> Self {
+        GridParams::new(Vec3::ZERO, 0, 1.0)
+    }
+}
+
+impl HashGrid {
+    /// Builds the grid of `positions` for merging within `radius`, by counting sort.
+    pub fn build(positions: impl Iterator<Item = Vec3> + Clone, radius: f32) -> HashGrid {
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut count = 0u32;
+        for p in positions.clone() {
+            min = min.min(p);
+            count += 1;
+        }
+        if count == 0 {
+            min = Vec3::ZERO;
+        }
+        let params = GridParams::new(min, count, radius);
+        // Count per bucket, then the exclusive prefix sum: starts[b] is where bucket b begins.
+        let mut starts = vec![0u32; params.buckets() + 1];
+        for p in positions.clone() {
+            starts[params.bucket(p) as usize + 1] += 1;
+        }
+        for b in 1..starts.len() {
+            starts[b] += starts[b - 1];
+        }
+        // Scatter in vertex order, so each bucket lists its vertices in increasing index.
+        let mut cursor = starts.clone();
+        let mut indices = vec![0u32; count as usize];
+        for (i, p) in positions.enumerate() {
+            let b = params.bucket(p) as usize;
+            indices[cursor[b] as usize] = i as u32;
+            cursor[b] += 1;
+        }
+        HashGrid {
+            params,
+            starts,
+            indices,
+        }
+    }
+
+    /// Calls `visit(i)` for every vertex i whose position (`position(i)`) lies within r of `p`
+    /// (|x − p|² < r²), bucket by bucket in the order of [`GridParams::query_buckets`].
+    #[inline]
+    pub fn query(&self, p: Vec3, position: impl Fn(u32) -> Vec3, mut visit: impl FnMut(u32)) {
+        if self.params.count == 0 {
+            return;
+        }
+        let (buckets, n) = self.params.query_buckets(p);
+        for &b in &buckets[..n] {
+            let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
+            for &i in &self.indices[start as usize..end as usize] {
+                if (position(i) - p).length_squared() < self.params.radius2 {
+                    visit(i);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_params_have_the_shader_layout() {
+        assert_eq!(std::mem::size_of::<GridParams>(), 32);
+    }
+
+    #[test]
+    fn every_bucket_lists_its_vertices_in_increasing_order() {
+        let points: Vec<Vec3> = (0..1000)
+            .map(|i| {
+                let f = i as f32;
+                Vec3::new((f * 0.37).sin(), (f * 0.11).cos(), (f * 0.07).sin()) * 3.0
+            })
+            .collect();
+        let grid = HashGrid::build(points.iter().copied(), 0.05);
+        assert_eq!(grid.indices.len(), 1000);
+        for b in 0..grid.params.buckets() {
+            let s = &grid.indices[grid.starts[b] as usize..grid.starts[b + 1] as usize];
+            assert!(s.windows(2).all(|w| w[0] < w[1]));
+            assert!(s
+                .iter()
+                .all(|&i| grid.params.bucket(points[i as usize]) == b as u32));
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! Photon merging's radius and its schedule over iterations (`--method sppm|vcm`).
+//!
+//! A merge estimates the light arriving at a camera vertex x from the light vertices
+//! (photons) y of the iteration's N light subpaths with |y − x| < r, each counted with the
+//! disk kernel 1 / (π r²) and divided by N (density estimation on the surface). The estimate is
+//! biased by the light's variation over the disk, by O(r²) where it is smooth, and consistent
+//! as r shrinks: iteration i (from 1) merges within
+//!
+//!   r_i = r_1 · i^((α − 1) / 2),
+//!
+//! Knaus and Zwicker's schedule ("Progressive photon mapping: a probabilistic approach", 2011,
+//! eq. 16, as SmallVCM uses it), with 0 < α < 1: the variance of iteration i grows as
+//! 1 / r_i² ∝ i^(1 − α) while its bias falls as r_i² ∝ i^(α − 1); the average over n iterations
+//! converges with both going to 0. The schedule depends only on the iteration index, so passes,
+//! threads, backends and resumption all merge within the same radii.
+
+use crate::flat::FlatScene;
+
+/// The default initial radius as a share of the scene's bounding-sphere radius (half the
+/// diagonal of its bounding box): scene-relative, as SmallVCM's `-r` is.
+pub const DEFAULT_RADIUS_FACTOR: f32 = 0.003;
+
+/// The default α: SmallVCM's and Knaus and Zwicker's 0.75.
+pub const DEFAULT_ALPHA: f32 = 0.75;
+
+/// The merge radius of a render: r_1 in scene units and α.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeRadius {
+    pub initial: f32,
+    pub alpha: f32,
+}
+
+impl MergeRadius {
+    /// The radius of iteration `iteration` (counted from 0, so the first is r_1).
+    #[inline]
+    pub fn at(&self, iteration: u32) -> f32 {
+        let i = iteration as f64 + 1.0;
+        (self.initial as f64 * i.powf((self.alpha as f64 - 1.0) * 0.5)) as f32
+    }
+
+    /// The default for a scene: [`DEFAULT_RADIUS_FACTOR`] of its bounding-sphere radius, α =
+    /// [`DEFAULT_ALPHA`].
+    pub fn default_for(scene: &FlatScene) -> MergeRadius {
+        MergeRadius {
+            initial: DEFAULT_RADIUS_FACTOR * scene_radius(scene),
+            alpha: DEFAULT_ALPHA,
+        }
+    }
+}
+
+/// Half the diagonal of the bounding box of the scene's triangles and spheres.
+pub fn scene_radius(scene: &FlatScene) -> f32 {
+    use glam::Vec3;
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for t in &scene.triangles {
+        for v in [t.v0, t.v1, t.v2] {
+            lo = lo.min(v.into());
+            hi = hi.max(v.into());
+        }
+    }
+    for s in &scene.spheres {
+        let c = Vec3::from(s.center);
+        lo = lo.min(c - s.radius);
+        hi = hi.max(c + s.radius);
+    }
+    if lo.x > hi.x {
+        return 0.0;
+    }
+    0.5 * (hi - lo).length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_radius_shrinks_as_the_schedule_says() {
+        let r = MergeRadius {
+            initial: 2.0,
+            alpha: 0.75,
+        };
+        assert_eq!(r.at(0), 2.0);
+        // r_4 = r_1 · 4^(−1/8).
+        assert!((r.at(3) - 2.0 * 4f32.powf(-0.125)).abs() < 1e-6);
+        assert!(r.at(100) < r.at(99));
+    }
+}
