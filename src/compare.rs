@@ -30,6 +30,31 @@ pub struct Comparison {
     /// relMSE that is the reference's own noise (E (x − r)² = var_x + var_r + bias²), to be
     /// subtracted when the reference is not much longer than the candidate.
     pub relmse_reference_noise: Option<f64>,
+    /// What the figures do not say: e.g. that an image was rendered by a consistent method
+    /// (sppm, vcm), whose standard error covers its noise but not its bias.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
+/// The note for an image rendered by a merging method (its EXR metadata's `method`), if it was.
+pub fn consistency_note(what: &str, path: &Path) -> Option<String> {
+    if path
+        .extension()
+        .is_none_or(|e| !e.eq_ignore_ascii_case("exr"))
+    {
+        return None;
+    }
+    let (_, meta) = read_exr(path).ok()?;
+    let method = crate::method::Method::from_name(meta.get("method")?)?;
+    method.merges().then(|| {
+        format!(
+            "the {what} was rendered with {method}, which is consistent, not unbiased: its \
+             variance (and so the z and 5 s.e. figures) covers its noise, not the bias of \
+             merging within radius {} (alpha {}), which shrinks with more iterations",
+            meta.get("merge_radius").unwrap_or("?"),
+            meta.get("merge_alpha").unwrap_or("?")
+        )
+    })
 }
 
 /// Reads an RGB image by extension: `.exr` (linear float) or `.npy` (float32/64, H x W x 3).
@@ -127,6 +152,7 @@ pub fn compare(
         beyond_5_se: beyond,
         mean_z2: z2,
         relmse_reference_noise: floor,
+        notes: Vec::new(),
     })
 }
 
@@ -149,6 +175,9 @@ impl Comparison {
         }
         if let Some(f) = self.relmse_reference_noise {
             s += &format!("relMSE of the reference's own noise {f:.4e}\n");
+        }
+        for note in &self.notes {
+            s += &format!("note: {note}\n");
         }
         s
     }

@@ -6,7 +6,9 @@
 //! nearer face). Cells are hashed into a power-of-two number of buckets, at least as many as
 //! vertices, and the vertices are sorted by bucket with a counting sort: count per bucket, an
 //! exclusive prefix sum, a scatter in vertex order. So the layout is a function of the vertices
-//! alone: bucket b holds `indices[starts[b]..starts[b + 1]]`, in increasing vertex index.
+//! alone: bucket b holds `entries[starts[b]..starts[b + 1]]`, in increasing vertex index, each
+//! entry the vertex's position and index in one vec4 (the index's bits in w), so that a query
+//! reads its buckets' positions contiguously and loads only the vertices within r.
 //! `shaders/hash_grid.wgsl` builds the same arrays with atomics and a scan dispatch and then
 //! sorts each bucket, so both backends hold the same grid bit for bit.
 //!
@@ -110,12 +112,19 @@ impl GridParams {
     }
 }
 
-/// The grid: constants, bucket starts (buckets + 1 entries) and vertex indices by bucket.
+/// The grid: constants, bucket starts (buckets + 1 entries) and the vertices by bucket, as
+/// (position, index bits).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HashGrid {
     pub params: GridParams,
     pub starts: Vec<u32>,
-    pub indices: Vec<u32>,
+    pub entries: Vec<[f32; 4]>,
+}
+
+/// The vertex index an entry holds.
+#[inline]
+pub fn entry_index(e: &[f32; 4]) -> u32 {
+    e[3].to_bits()
 }
 
 impl Default for GridParams {
@@ -147,32 +156,32 @@ impl HashGrid {
         }
         // Scatter in vertex order, so each bucket lists its vertices in increasing index.
         let mut cursor = starts.clone();
-        let mut indices = vec![0u32; count as usize];
+        let mut entries = vec![[0.0f32; 4]; count as usize];
         for (i, p) in positions.enumerate() {
             let b = params.bucket(p) as usize;
-            indices[cursor[b] as usize] = i as u32;
+            entries[cursor[b] as usize] = [p.x, p.y, p.z, f32::from_bits(i as u32)];
             cursor[b] += 1;
         }
         HashGrid {
             params,
             starts,
-            indices,
+            entries,
         }
     }
 
-    /// Calls `visit(i)` for every vertex i whose position (`position(i)`) lies within r of `p`
+    /// Calls `visit(i)` for every vertex i whose position lies within r of `p`
     /// (|x − p|² < r²), bucket by bucket in the order of [`GridParams::query_buckets`].
     #[inline]
-    pub fn query(&self, p: Vec3, position: impl Fn(u32) -> Vec3, mut visit: impl FnMut(u32)) {
+    pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
         if self.params.count == 0 {
             return;
         }
         let (buckets, n) = self.params.query_buckets(p);
         for &b in &buckets[..n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
-            for &i in &self.indices[start as usize..end as usize] {
-                if (position(i) - p).length_squared() < self.params.radius2 {
-                    visit(i);
+            for e in &self.entries[start as usize..end as usize] {
+                if (Vec3::new(e[0], e[1], e[2]) - p).length_squared() < self.params.radius2 {
+                    visit(entry_index(e));
                 }
             }
         }
@@ -197,9 +206,12 @@ mod tests {
             })
             .collect();
         let grid = HashGrid::build(points.iter().copied(), 0.05);
-        assert_eq!(grid.indices.len(), 1000);
+        assert_eq!(grid.entries.len(), 1000);
         for b in 0..grid.params.buckets() {
-            let s = &grid.indices[grid.starts[b] as usize..grid.starts[b + 1] as usize];
+            let s: Vec<u32> = grid.entries[grid.starts[b] as usize..grid.starts[b + 1] as usize]
+                .iter()
+                .map(entry_index)
+                .collect();
             assert!(s.windows(2).all(|w| w[0] < w[1]));
             assert!(s
                 .iter()

@@ -194,7 +194,15 @@ fn compare(args: &CompareArgs) -> ExitCode {
         })
     })();
     match result {
-        Ok(cmp) => {
+        Ok(mut cmp) => {
+            cmp.notes.extend(
+                [
+                    ("candidate", &args.candidate),
+                    ("reference", &args.reference),
+                ]
+                .iter()
+                .filter_map(|(what, path)| hexray::compare::consistency_note(what, path)),
+            );
             if args.json {
                 println!("{}", serde_json::to_string(&cmp).unwrap());
             } else {

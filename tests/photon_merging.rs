@@ -8,7 +8,7 @@ use crate::common::*;
 use glam::Vec3;
 use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::hash_grid::HashGrid;
+use hexray::hash_grid::{entry_index, HashGrid};
 use hexray::merging::MergeRadius;
 use hexray::method::Method;
 use hexray::sampling::Sampler;
@@ -32,7 +32,7 @@ fn points(n: u32, seed: u32) -> Vec<Vec3> {
 /// Every vertex within r of a query, by the grid (sorted) and by brute force.
 fn neighbours(grid: &HashGrid, vertices: &[Vec3], q: Vec3, r: f32) -> (Vec<u32>, Vec<u32>) {
     let mut found = Vec::new();
-    grid.query(q, |i| vertices[i as usize], |i| found.push(i));
+    grid.query(q, |i| found.push(i));
     found.sort_unstable();
     let brute = (0..vertices.len() as u32)
         .filter(|&i| (vertices[i as usize] - q).length_squared() < r * r)
@@ -70,10 +70,10 @@ fn the_grid_check_rejects_a_search_of_one_cell() {
     let grid = HashGrid::build(vertices.iter().copied(), r);
     let missed = points(2000, 2).iter().any(|&q| {
         let own = grid.params.bucket(q) as usize;
-        let mut found: Vec<u32> = grid.indices
+        let mut found: Vec<u32> = grid.entries
             [grid.starts[own] as usize..grid.starts[own + 1] as usize]
             .iter()
-            .copied()
+            .map(entry_index)
             .filter(|&i| (vertices[i as usize] - q).length_squared() < r * r)
             .collect();
         found.sort_unstable();

@@ -251,35 +251,31 @@ impl CameraPass<'_> {
                 // use its own normal's cosine, which stays positive across the disk.
                 if let Some(photons) = &self.photons {
                     let mut gathered = Vec3::ZERO;
-                    photons.grid.query(
-                        hit.p,
-                        |i| Vec3::from(photons.vertices[i as usize].p),
-                        |i| {
-                            let v = &photons.vertices[i as usize];
-                            let n_light = Vec3::from(v.n);
-                            if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
-                                return;
-                            }
-                            let w = if self.connects {
-                                let light_mis = SubpathMis {
-                                    d_vcm: v.d_vcm,
-                                    d_vc: v.d_vc,
-                                    d_vm: v.d_vm,
-                                };
-                                let cos_light = n_light.dot(Vec3::from(v.wo));
-                                weight_merge(
-                                    &mis,
-                                    &light_mis,
-                                    &self.merge,
-                                    cos_light * FRAC_1_PI,
-                                    pdf_rev,
-                                )
-                            } else {
-                                1.0
+                    photons.grid.query(hit.p, |i| {
+                        let v = &photons.vertices[i as usize];
+                        let n_light = Vec3::from(v.n);
+                        if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
+                            return;
+                        }
+                        let w = if self.connects {
+                            let light_mis = SubpathMis {
+                                d_vcm: v.d_vcm,
+                                d_vc: v.d_vc,
+                                d_vm: v.d_vm,
                             };
-                            gathered += Vec3::from(v.throughput) * w;
-                        },
-                    );
+                            let cos_light = n_light.dot(Vec3::from(v.wo));
+                            weight_merge(
+                                &mis,
+                                &light_mis,
+                                &self.merge,
+                                cos_light * FRAC_1_PI,
+                                pdf_rev,
+                            )
+                        } else {
+                            1.0
+                        };
+                        gathered += Vec3::from(v.throughput) * w;
+                    });
                     radiance +=
                         throughput * albedo * gathered * (FRAC_1_PI * photons.normalization);
                     if !self.connects {
