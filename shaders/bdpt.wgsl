@@ -3,7 +3,14 @@
 // glass), and at each of its vertices every strategy that ends there: the emitter it hits
 // (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
-// rouletted by its contribution.
+// rouletted by its contribution. With photons, the camera pass of the merging methods: VCM adds
+// the merges at every diffuse vertex (hash_grid.wgsl), SPPM merges at the first diffuse vertex
+// alone.
+
+// Whether the method takes BDPT's strategies (BDPT, VCM; not SPPM).
+fn connects() -> bool {
+    return frame.method != METHOD_SPPM;
+}
 
 // Whether surface points a and b (points, error bounds, unit normals) see each other, after
 // Russian roulette on the ray by `value`, the contribution it would bring (drawing u): the factor
@@ -57,10 +64,14 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
         let depth = bounce + 1u;
 
         // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
-        // light point taken by next-event estimation or by a light subpath.
+        // light point taken by next-event estimation or by a light subpath (SPPM meets it
+        // only through mirrors and glass, where nothing else can: weight 1).
         if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
             let pdf_area = emitter_pdf_area(hit.prim);
-            let w = weight_emission(m, pdf_area, cos_o * FRAC_1_PI);
+            var w = 1.0;
+            if connects() {
+                w = weight_emission(m, pdf_area, cos_o * FRAC_1_PI);
+            }
             radiance += throughput * material.emission * w;
         }
 
@@ -85,7 +96,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             let wi = to_light / sqrt(dist2);
             let cos_l = -dot(ls.n, wi);
             let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-            if bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 && depth < max_edges {
+            if connects() && depth < max_edges && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                 let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
                 let w = weight_next_event(m, iteration_merge(), bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
@@ -96,7 +107,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             // Step 5 - connections (s >= 2): to each vertex of this pixel's light subpath, one
             // shadow ray each; the contribution is beta f_c G f_l alpha, weighted against every
             // other strategy on both sides.
-            var k = atomicLoad(&tallies[path_head(path)]);
+            var k = select(NO_VERTEX, atomicLoad(&tallies[path_head(path)]), connects());
             var i = 0u;
             while k != NO_VERTEX {
                 let v = light_vertices[k];
@@ -129,7 +140,42 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
                 radiance += value * visibility(hit.p, hit.p_err, hit.n, v.p, vec3<f32>(v.p_err), v.n, value, u);
             }
 
-            // Step 6 - merging (VCM, SPPM): on the CPU backend only so far (src/cpu/bdpt.rs).
+            // Step 6 - merging (VCM, SPPM): every photon of the iteration within r on the same
+            // side of the surface, counted with the disk kernel 1 / (pi r^2 N) times f alpha,
+            // weighted against every other strategy (SPPM: 1). The photon is taken as arrived
+            // here: Lambert's f = rho / pi, and the densities of its direction use its own
+            // normal's cosine, which stays positive across the disk.
+            if merges() {
+                var gathered = vec3<f32>(0.0);
+                let q = query_buckets(hit.p);
+                for (var j = 0u; j < q.n; j++) {
+                    let b = q.b[j];
+                    let end = atomicLoad(&grid_starts[b + 1u]);
+                    for (var e = atomicLoad(&grid_starts[b]); e < end; e++) {
+                        let entry = grid_entries[e];
+                        let d = entry.xyz - hit.p;
+                        if dot(d, d) >= grid_params.radius2 {
+                            continue;
+                        }
+                        let v = light_vertices[bitcast<u32>(entry.w)];
+                        if depth + v.length > max_edges || dot(v.n, n_facing) <= 0.0 {
+                            continue;
+                        }
+                        var w = 1.0;
+                        if connects() {
+                            let light_mis = SubpathMis(v.d_vcm, v.d_vc, v.d_vm);
+                            let cos_light = dot(v.n, v.wo);
+                            w = weight_merge(m, light_mis, iteration_merge(), cos_light * FRAC_1_PI, pdf_rev);
+                        }
+                        gathered += v.throughput * w;
+                    }
+                }
+                radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization);
+                if !connects() {
+                    // SPPM merges at the first diffuse vertex only.
+                    break;
+                }
+            }
         }
 
         // Step 7 - scattering: sample the BSDF for the next direction; the throughput takes

@@ -53,7 +53,7 @@ fn resolve_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         let index = y * frame.camera.width + x;
         let splat = splat_take(splat_cell(index));
         var l = splat.rgb;
-        if frame.method == METHOD_BDPT {
+        if frame.method != METHOD_LIGHT {
             l += camera_radiance[index].xyz;
         }
         if !overflowed {

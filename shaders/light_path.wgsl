@@ -1,7 +1,7 @@
-// The light pass of light tracing and BDPT: `src/cpu/light_path.rs` again, with the same names,
-// steps and step comments. One light subpath per invocation, its non-specular vertices (the
-// light point included) splatted into the pixels that see them (t = 1) and, for BDPT, stored in
-// the pool for the camera pass.
+// The light pass of light tracing, BDPT, SPPM and VCM: `src/cpu/light_path.rs` again, with the
+// same names, steps and step comments. One light subpath per invocation, its non-specular
+// vertices (the light point included) splatted into the pixels that see them (t = 1; not for
+// SPPM) and, but for light tracing, stored in the pool for the camera pass.
 
 // Whether a material scatters diffusely: diffuse surfaces, and emitters that also reflect.
 fn is_diffuse(material: Material) -> bool {
@@ -63,7 +63,11 @@ fn store_light_vertex(path: u32, last: u32, v: LightVertex) -> u32 {
 // stores its diffuse vertices.
 fn trace_light_path(sampler: Sampler, path: u32) {
     let n_paths = f32(frame.n_light_paths);
-    let bidirectional = frame.method == METHOD_BDPT;
+    // MIS-weighted splats (not light tracing's weight 1), stored vertices (not light tracing),
+    // splats at all (not SPPM).
+    let bidirectional = frame.method != METHOD_LIGHT;
+    let stores = frame.method != METHOD_LIGHT;
+    let splats_to_camera = frame.method != METHOD_SPPM;
     let camera = frame.camera;
     atomicStore(&tallies[path_head(path)], NO_VERTEX);
     // The last vertex stored, and whether the pool ran out (then nothing more is stored).
@@ -79,7 +83,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     // importance and the geometry term toward the eye, against the camera subpaths that
     // hit the emitter there (s = 0).
     let r = camera_raster(camera, light.p);
-    if r.seen {
+    if r.seen && splats_to_camera {
         let cos_l = -dot(light.n, r.dir);
         if cos_l > 0.0 && 1u <= max_path_edges() {
             let pixel = r.y * camera.width + r.x;
@@ -127,9 +131,10 @@ fn trace_light_path(sampler: Sampler, path: u32) {
         if diffuse {
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
 
-            // Step 4 - store the vertex for the camera subpaths (BDPT).
-            if bidirectional && !full {
-                let v = LightVertex(hit.p, max_element(hit.p_err), n_facing, hit.material, wo, length, throughput, NO_VERTEX, m.d_vcm, m.d_vc, m.d_vm, 0u);
+            // Step 4 - store the vertex for the camera subpaths to connect to and merge with
+            // (BDPT, VCM, SPPM).
+            if stores && !full {
+                let v = LightVertex(hit.p, max_element(hit.p_err), n_facing, hit.material, wo, length, throughput, NO_VERTEX, m.d_vcm, m.d_vc, m.d_vm, path);
                 last = store_light_vertex(path, last, v);
                 full = last == NO_VERTEX;
             }
@@ -137,7 +142,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
             // Step 5 - connect to the camera (t = 1): splat alpha f W |cos| / dist^2 / N into
             // the pixel that sees the vertex.
             let rv = camera_raster(camera, hit.p);
-            if rv.seen {
+            if rv.seen && splats_to_camera {
                 let bsdf = eval_diffuse(material.color, n_facing, wo, -rv.dir);
                 if bsdf.pdf > 0.0 && length < max_path_edges() {
                     let pixel = rv.y * camera.width + rv.x;

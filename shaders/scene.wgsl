@@ -78,7 +78,7 @@ struct Frame {
     light_samples: u32,
     // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
     grey_indirect: u32,
-    // METHOD_PATH, METHOD_LIGHT or METHOD_BDPT.
+    // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM or METHOD_VCM.
     method: u32,
     // N: light subpaths per iteration (one per pixel).
     n_light_paths: u32,
@@ -93,11 +93,19 @@ struct Frame {
     importance_missing_cos: u32,
     // tau of BDPT's Russian roulette on visibility rays (0: none).
     shadow_threshold: f32,
+    // Merging's MIS constants this iteration (`MergeMis`; 0 but for SPPM and VCM).
+    merge_vm: f32,
+    merge_vc: f32,
+    // The merge kernel's normalisation 1 / (pi r^2 N).
+    merge_normalization: f32,
+    pad: u32,
 }
 
 const METHOD_PATH: u32 = 0u;
 const METHOD_LIGHT: u32 = 1u;
 const METHOD_BDPT: u32 = 2u;
+const METHOD_SPPM: u32 = 3u;
+const METHOD_VCM: u32 = 4u;
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).
 struct PixelSums {

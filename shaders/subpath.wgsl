@@ -21,7 +21,8 @@ struct LightVertex {
     d_vcm: f32,
     d_vc: f32,
     d_vm: f32,
-    pad: u32,
+    // The light subpath's index (its pixel).
+    path: u32,
 }
 
 const NO_VERTEX: u32 = 0xffffffffu;
@@ -55,9 +56,14 @@ struct MergeMis {
     vc: f32,
 }
 
-// This iteration's merging constants (the GPU backend does not merge yet: BDPT's).
+// This iteration's merging constants (both 0 but for SPPM and VCM).
 fn iteration_merge() -> MergeMis {
-    return MergeMis(0.0, 0.0);
+    return MergeMis(frame.merge_vm, frame.merge_vc);
+}
+
+// Whether this iteration merges photons (SPPM, VCM, at a radius above 0).
+fn merges() -> bool {
+    return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM) && frame.merge_normalization > 0.0;
 }
 
 // Georgiev's recursive quantities of one subpath vertex (`SubpathMis`).

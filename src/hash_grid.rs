@@ -34,7 +34,7 @@ pub fn hash_cell(c: IVec3) -> u32 {
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GridParams {
-    /// The smallest corner of the vertices' bounding box.
+    /// The origin of the cells: the scene's bounding-box corner.
     pub min: [f32; 3],
     /// 1 / cell size = 1 / (2 r).
     pub inv_cell: f32,
@@ -134,17 +134,15 @@ impl Default for GridParams {
 }
 
 impl HashGrid {
-    /// Builds the grid of `positions` for merging within `radius`, by counting sort.
-    pub fn build(positions: impl Iterator<Item = Vec3> + Clone, radius: f32) -> HashGrid {
-        let mut min = Vec3::splat(f32::INFINITY);
-        let mut count = 0u32;
-        for p in positions.clone() {
-            min = min.min(p);
-            count += 1;
-        }
-        if count == 0 {
-            min = Vec3::ZERO;
-        }
+    /// Builds the grid of `positions` for merging within `radius`, by counting sort, with cells
+    /// counted from `min` (the scene's bounding-box corner, known to both backends before any
+    /// vertex is traced).
+    pub fn build(
+        positions: impl Iterator<Item = Vec3> + Clone,
+        min: Vec3,
+        radius: f32,
+    ) -> HashGrid {
+        let count = positions.clone().count() as u32;
         let params = GridParams::new(min, count, radius);
         // Count per bucket, then the exclusive prefix sum: starts[b] is where bucket b begins.
         let mut starts = vec![0u32; params.buckets() + 1];
@@ -205,7 +203,7 @@ mod tests {
                 Vec3::new((f * 0.37).sin(), (f * 0.11).cos(), (f * 0.07).sin()) * 3.0
             })
             .collect();
-        let grid = HashGrid::build(points.iter().copied(), 0.05);
+        let grid = HashGrid::build(points.iter().copied(), Vec3::splat(-3.0), 0.05);
         assert_eq!(grid.entries.len(), 1000);
         for b in 0..grid.params.buckets() {
             let s: Vec<u32> = grid.entries[grid.starts[b] as usize..grid.starts[b + 1] as usize]

@@ -825,14 +825,6 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             cpu.radius = Some(radius);
             Box::new(cpu)
         }
-        Some(g) if args.method.merges() => {
-            eprintln!(
-                "error: --method {} runs on --backend cpu only so far; the GPU backend (found {}) \
-                 has path, light and bdpt",
-                args.method, g.info.name
-            );
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
-        }
         Some(g) => {
             let checks = if args.shader_checks {
                 gpu::Checks::Checked
@@ -857,6 +849,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 args.method,
             )?;
             renderer.set_light_samples(args.light_samples);
+            renderer.set_merge_radius(radius);
             if !args.quiet {
                 eprintln!(
                     "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",

@@ -62,6 +62,13 @@ impl MergeRadius {
 
 /// Half the diagonal of the bounding box of the scene's triangles and spheres.
 pub fn scene_radius(scene: &FlatScene) -> f32 {
+    let (lo, hi) = scene_bounds(scene);
+    0.5 * (hi - lo).length()
+}
+
+/// The bounding box of the scene's triangles and spheres (zero for an empty scene): the hash
+/// grid's origin on both backends.
+pub fn scene_bounds(scene: &FlatScene) -> (glam::Vec3, glam::Vec3) {
     use glam::Vec3;
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for t in &scene.triangles {
@@ -76,9 +83,9 @@ pub fn scene_radius(scene: &FlatScene) -> f32 {
         hi = hi.max(c + s.radius);
     }
     if lo.x > hi.x {
-        return 0.0;
+        return (Vec3::ZERO, Vec3::ZERO);
     }
-    0.5 * (hi - lo).length()
+    (lo, hi)
 }
 
 #[cfg(test)]

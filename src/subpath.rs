@@ -168,7 +168,9 @@ pub struct LightVertex {
     pub d_vcm: f32,
     pub d_vc: f32,
     pub d_vm: f32,
-    pub pad: u32,
+    /// The light subpath's index (its pixel): with `length`, the vertex's place in the CPU's
+    /// order, which the GPU's hash grid sorts its buckets by.
+    pub path: u32,
 }
 
 /// The end of a light subpath's list of vertices (`LightVertex::next`).

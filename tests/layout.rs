@@ -6,6 +6,7 @@ use hexray::camera::Camera;
 use hexray::flat::{BvhNode, Emitter, Material, Sphere, Triangle};
 use hexray::gpu::render::{Frame, PixelSums};
 use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
+use hexray::hash_grid::GridParams;
 use hexray::subpath::LightVertex;
 use std::mem::{offset_of, size_of};
 
@@ -107,7 +108,19 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             path_origin,
             path_count,
             importance_missing_cos,
-            shadow_threshold
+            shadow_threshold,
+            merge_vm,
+            merge_vc,
+            merge_normalization,
+            pad
+        }),
+        rust_layout!(GridParams {
+            min,
+            inv_cell,
+            mask,
+            count,
+            radius2,
+            pad
         }),
         rust_layout!(LightVertex {
             p,
@@ -121,7 +134,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             d_vcm,
             d_vc,
             d_vm,
-            pad
+            path
         }),
         rust_layout!(PixelSums {
             sum,

@@ -124,11 +124,12 @@ impl LightPass<'_> {
         1
     }
 
-    /// Traces the light subpath of `sampler`: splats its connections to the camera into
+    /// Traces light subpath `path` of `sampler`: splats its connections to the camera into
     /// `splats` (not for SPPM) and, but for light tracing, appends its diffuse vertices to
     /// `vertices`, in order. Returns the number of rays traced.
     pub fn trace(
         &self,
+        path: u32,
         sampler: &Sampler,
         splats: &Splats,
         vertices: &mut Vec<LightVertex>,
@@ -224,7 +225,7 @@ impl LightPass<'_> {
                         d_vcm: mis.d_vcm,
                         d_vc: mis.d_vc,
                         d_vm: mis.d_vm,
-                        pad: 0,
+                        path,
                     });
                 }
 

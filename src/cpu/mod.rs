@@ -99,6 +99,8 @@ pub struct LightPassBuffers {
     pub vertices: Vec<LightVertex>,
     pub starts: Vec<u32>,
     pub grid: HashGrid,
+    /// The grid's origin: the scene's bounding-box corner (`merging::scene_bounds`).
+    pub grid_min: glam::Vec3,
     /// The merge radius's schedule (SPPM, VCM).
     pub radius: MergeRadius,
     /// n_c per pixel (`subpath::camera_subpaths`).
@@ -120,6 +122,7 @@ impl LightPassBuffers {
             vertices: Vec::new(),
             starts: Vec::new(),
             grid: HashGrid::default(),
+            grid_min: crate::merging::scene_bounds(scene).0,
             radius,
             camera_subpaths: if bdpt {
                 crate::subpath::camera_subpaths(scene, camera)
@@ -196,7 +199,8 @@ pub fn render_iterations(
                 let mut ends = Vec::with_capacity(LIGHT_CHUNK as usize);
                 let mut rays = 0;
                 for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
-                    rays += pass.trace(&Sampler::new(seed, i, s), &buffers.splats, &mut vertices);
+                    rays +=
+                        pass.trace(i, &Sampler::new(seed, i, s), &buffers.splats, &mut vertices);
                     ends.push(vertices.len() as u32);
                 }
                 (vertices, ends, rays)
@@ -214,7 +218,11 @@ pub fn render_iterations(
 
         // The hash grid of the iteration's light vertices (merging).
         if radius > 0.0 {
-            buffers.grid = HashGrid::build(buffers.vertices.iter().map(|v| v.p.into()), radius);
+            buffers.grid = HashGrid::build(
+                buffers.vertices.iter().map(|v| v.p.into()),
+                buffers.grid_min,
+                radius,
+            );
         }
 
         // The camera pass: each pixel's camera subpaths, plus its splats.

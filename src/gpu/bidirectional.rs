@@ -15,11 +15,19 @@
 //! the host traces it again in smaller waves, drawing the same random numbers, so the film gets
 //! exactly the iteration it would have had. Light subpaths are therefore never cut short and no
 //! strategy ever leaves the MIS weights for want of storage.
+//!
+//! The merging methods (SPPM, VCM) need every light vertex of the iteration before any camera
+//! subpath, so they trace one wave of all rows, then build the hash grid of the vertices in
+//! dispatches (`shaders/hash_grid.wgsl`: setup, count, scan, scatter, sort), then run the camera
+//! pass. An iteration that overflows the pool is traced again after the pool has grown; one
+//! that cannot fit in what the device binds ends the render with a clear error.
 
 use super::render::{compute_pipeline, Frame, GpuRenderer, MAX_PASS_SPP, WORKGROUP};
 use crate::film::{Film, PixelStats};
+use crate::hash_grid::GridParams;
+use crate::merging::MergeRadius;
 use crate::method::Method;
-use crate::subpath::LightVertex;
+use crate::subpath::{LightVertex, MergeMis};
 use anyhow::{bail, Result};
 use std::time::Instant;
 use wgpu::util::DeviceExt;
@@ -34,14 +42,41 @@ const LIGHT_WORKGROUP: u32 = 64;
 /// stores about 4, a white furnace of albedo 0.95 about 20.
 const FIRST_VERTICES_PER_PATH: f64 = 8.0;
 
-/// Light tracing's and BDPT's kernels and buffers.
+/// The light-vertex pool and the hash grid over it, which grow together.
+struct Pool {
+    bind_group: wgpu::BindGroup,
+    grid_params: wgpu::Buffer,
+    grid_starts: wgpu::Buffer,
+    grid_cursor: wgpu::Buffer,
+}
+
+/// The merging methods' kernels and radius.
+struct Merging {
+    setup: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    sort: wgpu::ComputePipeline,
+    radius: MergeRadius,
+    /// The grid's origin (`merging::scene_bounds`), as on the CPU.
+    grid_min: glam::Vec3,
+    /// The test-only fault `Faults::merge_kernel_ball`.
+    ball_kernel: bool,
+}
+
+/// Light tracing's, BDPT's, SPPM's and VCM's kernels and buffers.
 pub struct Bidirectional {
     light_pipeline: wgpu::ComputePipeline,
-    /// BDPT only.
+    /// All but light tracing.
     camera_pipeline: Option<wgpu::ComputePipeline>,
     resolve_pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
+    merging: Option<Merging>,
+    layout: wgpu::BindGroupLayout,
+    pool: Pool,
     tallies: wgpu::Buffer,
+    camera_radiance: wgpu::Buffer,
+    /// The most light vertices the device binds in one buffer.
+    max_capacity: u32,
     tally_readback: wgpu::Buffer,
     /// Light vertices the pool holds.
     pub capacity: u32,
@@ -64,6 +99,73 @@ fn tally_words(pixels: u64) -> u64 {
     vertex_counter_word(pixels) + 1 + pixels
 }
 
+/// A storage buffer that copies can also read and write.
+fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl Pool {
+    /// The pool for `capacity` light vertices, and its grid: at most next_pow2(capacity)
+    /// buckets, so bucket starts and cursors of that many + 1 words.
+    fn new(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        capacity: u32,
+        tallies: &wgpu::Buffer,
+        camera_radiance: &wgpu::Buffer,
+    ) -> Pool {
+        let vertices = storage(
+            device,
+            "light vertices",
+            capacity as u64 * std::mem::size_of::<LightVertex>() as u64,
+        );
+        let grid_params = storage(
+            device,
+            "grid params",
+            std::mem::size_of::<GridParams>() as u64,
+        );
+        let buckets = (capacity.max(1) as u64).next_power_of_two();
+        let grid_starts = storage(device, "grid starts", 4 * (buckets + 1));
+        let grid_cursor = storage(device, "grid cursor", 4 * (buckets + 1));
+        let grid_entries = storage(device, "grid entries", 16 * capacity as u64);
+        let buffers = [
+            &vertices,
+            tallies,
+            camera_radiance,
+            &grid_params,
+            &grid_starts,
+            &grid_entries,
+            &grid_cursor,
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("light subpaths"),
+            layout,
+            entries: &entries,
+        });
+        Pool {
+            bind_group,
+            grid_params,
+            grid_starts,
+            grid_cursor,
+        }
+    }
+}
+
 impl Bidirectional {
     pub fn new(
         device: &wgpu::Device,
@@ -72,6 +174,7 @@ impl Bidirectional {
         method: Method,
         scene: &crate::flat::FlatScene,
         camera: &crate::camera::Camera,
+        ball_kernel: bool,
     ) -> Result<Bidirectional> {
         let (width, height) = (camera.width, camera.height);
         let pixels = width as u64 * height as u64;
@@ -91,40 +194,30 @@ impl Bidirectional {
             );
         }
         // The pool: room for the whole image at the first estimate, within what the device
-        // binds (BDPT only; light tracing stores nothing).
+        // binds (light tracing stores nothing). Grid entries are 16 bytes a vertex, the
+        // vertices 80, so the vertices bound the pool.
+        let max_capacity = (max_binding / vertex_size).min(u32::MAX as u64 / 2) as u32;
         let capacity = match method {
-            Method::Bdpt => ((pixels as f64 * FIRST_VERTICES_PER_PATH) as u64)
-                .clamp(1 << 16, max_binding / vertex_size)
-                .min(u32::MAX as u64 - 1) as u32,
-            _ => 1,
+            Method::Light => 1,
+            _ => ((pixels as f64 * FIRST_VERTICES_PER_PATH) as u64)
+                .clamp(1 << 16, max_capacity as u64) as u32,
         };
-        let storage = |label, size| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
-        let vertices = storage("light vertices", capacity as u64 * vertex_size);
-        let tallies = storage("tallies", tallies_size);
+        let tallies = storage(device, "tallies", tallies_size);
         // Each pixel's camera radiance of the iteration, and in the fourth lane its n_c
         // (`subpath::camera_subpaths`, 1 for light tracing).
         let specular_pixels = match method {
-            Method::Bdpt => crate::subpath::camera_subpaths(scene, camera)
+            Method::Light => 0,
+            _ => crate::subpath::camera_subpaths(scene, camera)
                 .iter()
                 .filter(|&&n| n > 1)
                 .count(),
-            _ => 0,
         };
         let n_c: Vec<[f32; 4]> = match method {
-            Method::Bdpt => crate::subpath::camera_subpaths(scene, camera)
+            Method::Light => vec![[0.0, 0.0, 0.0, 1.0]; pixels as usize],
+            _ => crate::subpath::camera_subpaths(scene, camera)
                 .iter()
                 .map(|&n| [0.0, 0.0, 0.0, n as f32])
                 .collect(),
-            _ => vec![[0.0, 0.0, 0.0, 1.0]; pixels as usize],
         };
         let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera radiance"),
@@ -149,34 +242,31 @@ impl Bidirectional {
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("light subpaths"),
-            entries: &[entry(0), entry(1), entry(2)],
+            entries: &(0..7).map(entry).collect::<Vec<_>>(),
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("light subpaths"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: vertices.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: tallies.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: camera_radiance.as_entire_binding(),
-                },
-            ],
-        });
+        let pool = Pool::new(device, &layout, capacity, &tallies, &camera_radiance);
         let layouts = [scene_layout, &layout];
+        let pipeline = |entry| compute_pipeline(device, module, &layouts, entry);
+        let merging = method.merges().then(|| Merging {
+            setup: pipeline("grid_setup"),
+            count: pipeline("grid_count"),
+            scan: pipeline("grid_scan"),
+            scatter: pipeline("grid_scatter"),
+            sort: pipeline("grid_sort"),
+            radius: MergeRadius::default_for(scene),
+            grid_min: crate::merging::scene_bounds(scene).0,
+            ball_kernel,
+        });
         Ok(Bidirectional {
-            light_pipeline: compute_pipeline(device, module, &layouts, "light_pass"),
-            camera_pipeline: (method == Method::Bdpt)
-                .then(|| compute_pipeline(device, module, &layouts, "camera_pass")),
-            resolve_pipeline: compute_pipeline(device, module, &layouts, "resolve_pass"),
-            bind_group,
+            light_pipeline: pipeline("light_pass"),
+            camera_pipeline: (method != Method::Light).then(|| pipeline("camera_pass")),
+            resolve_pipeline: pipeline("resolve_pass"),
+            merging,
+            layout,
+            pool,
             tallies,
+            camera_radiance,
+            max_capacity,
             tally_readback,
             capacity,
             vertices_per_path: FIRST_VERTICES_PER_PATH,
@@ -192,10 +282,17 @@ impl GpuRenderer {
     pub fn provenance(&self) -> Vec<(&'static str, String)> {
         match &self.bidirectional {
             Some(b) if b.camera_pipeline.is_some() => {
-                let mut v = crate::render::bidirectional_provenance(
-                    self.frame.shadow_threshold,
-                    b.specular_pixels,
-                );
+                let mut v = if self.method.connects() {
+                    crate::render::bidirectional_provenance(
+                        self.frame.shadow_threshold,
+                        b.specular_pixels,
+                    )
+                } else {
+                    Vec::new()
+                };
+                if let Some(m) = &b.merging {
+                    v.extend(crate::render::merging_provenance(&m.radius));
+                }
                 v.push((
                     "light_vertex_pool",
                     format!(
@@ -235,10 +332,55 @@ impl GpuRenderer {
             let mut cpass = encoder.begin_compute_pass(&Default::default());
             cpass.set_pipeline(pipeline);
             cpass.set_bind_group(0, &self.bind_group, &[]);
-            cpass.set_bind_group(1, &b.bind_group, &[]);
+            cpass.set_bind_group(1, &b.pool.bind_group, &[]);
             cpass.dispatch_workgroups(groups.0, groups.1, 1);
         }
         self.queue.submit([encoder.finish()]);
+    }
+
+    /// The merge radius's schedule of SPPM and VCM (`--radius`, `--alpha`).
+    pub fn set_merge_radius(&mut self, radius: MergeRadius) {
+        if let Some(m) = self.bidirectional.as_mut().and_then(|b| b.merging.as_mut()) {
+            m.radius = radius;
+        }
+    }
+
+    /// Runs `pipeline` once per item `0..count` (`frame.path_origin` + the invocation), in
+    /// dispatches of at most 65535 workgroups of 64.
+    fn item_dispatches(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, count: u32) {
+        let per = 65_535 * LIGHT_WORKGROUP;
+        let mut a = 0;
+        while a < count {
+            let n = per.min(count - a);
+            let f = Frame {
+                path_origin: a,
+                ..*frame
+            };
+            self.dispatch(pipeline, &f, (n.div_ceil(LIGHT_WORKGROUP), 1));
+            a += n;
+        }
+    }
+
+    /// Builds the hash grid over the pool's light vertices (`shaders/hash_grid.wgsl`), for the
+    /// iteration whose frame (with its merge constants) is `frame`, merging within `radius`.
+    fn build_grid(&self, frame: &Frame, radius: f32) {
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        let m = b.merging.as_ref().expect("a merging method");
+        let params = GridParams::new(m.grid_min, 0, radius);
+        self.queue
+            .write_buffer(&b.pool.grid_params, 0, bytemuck::bytes_of(&params));
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&b.pool.grid_starts, 0, None);
+        self.queue.submit([encoder.finish()]);
+        let buckets = (b.capacity.max(1) as u64).next_power_of_two() as u32;
+        self.dispatch(&m.setup, frame, (1, 1));
+        self.item_dispatches(&m.count, frame, b.capacity);
+        self.dispatch(&m.scan, frame, (1, 1));
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&b.pool.grid_starts, 0, &b.pool.grid_cursor, 0, None);
+        self.queue.submit([encoder.finish()]);
+        self.item_dispatches(&m.scatter, frame, b.capacity);
+        self.item_dispatches(&m.sort, frame, buckets);
     }
 
     /// Runs the light pass over subpaths `origin..origin + count`, in dispatches of about
@@ -294,8 +436,13 @@ impl GpuRenderer {
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let pixels = w as u64 * h as u64;
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
-        // Rows per wave: as many as the pool holds at the measured vertices per subpath.
-        let wave_rows = ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h);
+        // Rows per wave: as many as the pool holds at the measured vertices per subpath (all
+        // of them when merging, which needs every light vertex of the iteration).
+        let wave_rows = if b.merging.is_some() {
+            h
+        } else {
+            ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h)
+        };
 
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.sums, 0, None);
@@ -306,11 +453,33 @@ impl GpuRenderer {
         );
         self.queue.submit([encoder.finish()]);
         for (slot, &s) in iterations.iter().enumerate() {
+            // Merging's radius this iteration, its constants in the MIS weights and the
+            // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
+            let (radius, merge, normalization) = match &b.merging {
+                Some(m) if m.radius.at(s) > 0.0 => {
+                    let r = m.radius.at(s);
+                    let n = pixels as f32;
+                    let normalization = if m.ball_kernel {
+                        1.0 / (4.0 / 3.0 * std::f32::consts::PI * r.powi(3) * n)
+                    } else {
+                        1.0 / (std::f32::consts::PI * r * r * n)
+                    };
+                    (
+                        r,
+                        MergeMis::new(r, pixels as u32, self.method.connects()),
+                        normalization,
+                    )
+                }
+                _ => (0.0, MergeMis::NONE, 0.0),
+            };
             let frame = Frame {
                 first_sample: s,
                 sample_count: 1,
                 slot: slot as u32,
                 vertex_capacity: b.capacity,
+                merge_vm: merge.vm,
+                merge_vc: merge.vc,
+                merge_normalization: normalization,
                 ..self.frame
             };
             match &b.camera_pipeline {
@@ -326,6 +495,9 @@ impl GpuRenderer {
                         encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(pixels), Some(4));
                         self.queue.submit([encoder.finish()]);
                         self.light_dispatches(&frame, y * w, (y1 - y) * w);
+                        if radius > 0.0 {
+                            self.build_grid(&frame, radius);
+                        }
                         self.row_dispatches(camera, &frame, y, y1);
                         y = y1;
                     }
@@ -374,7 +546,27 @@ impl GpuRenderer {
 
         // Size the next waves and dispatches from what this pass measured.
         let b = self.bidirectional.as_mut().expect("light subpath buffers");
-        if b.camera_pipeline.is_some() {
+        if b.merging.is_some() && !overflowed.is_empty() {
+            // One wave must hold the iteration: grow the pool and its grid, or give up.
+            b.retraced += overflowed.len() as u64;
+            if most_asked > b.max_capacity {
+                bail!(
+                    "{}: one iteration's {most_asked} light vertices exceed what this GPU binds \
+                     in one buffer ({} vertices); render a smaller image, or use --backend cpu",
+                    self.method,
+                    b.max_capacity
+                );
+            }
+            b.capacity = ((most_asked as u64 * 5 / 4).max(2 * b.capacity as u64))
+                .min(b.max_capacity as u64) as u32;
+            b.pool = Pool::new(
+                &self.device,
+                &b.layout,
+                b.capacity,
+                &b.tallies,
+                &b.camera_radiance,
+            );
+        } else if b.camera_pipeline.is_some() && b.merging.is_none() {
             let asked_per_path = most_asked as f64 / (wave_rows as f64 * w as f64);
             b.vertices_per_path = (1.25 * asked_per_path).max(0.5);
             if !overflowed.is_empty() {

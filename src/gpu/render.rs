@@ -33,7 +33,7 @@ pub struct Frame {
     pub light_samples: u32,
     /// `Faults::grey_indirect` as 0 or 1 (test-only).
     pub grey_indirect: u32,
-    /// `METHOD_*` in `shaders/scene.wgsl`: 0 path, 1 light, 2 bdpt.
+    /// `METHOD_*` in `shaders/scene.wgsl`: 0 path, 1 light, 2 bdpt, 3 sppm, 4 vcm.
     pub method: u32,
     /// N: light subpaths per iteration (one per pixel).
     pub n_light_paths: u32,
@@ -48,6 +48,12 @@ pub struct Frame {
     pub importance_missing_cos: u32,
     /// τ of BDPT's Russian roulette on visibility rays (`subpath::shadow_threshold`; 0: none).
     pub shadow_threshold: f32,
+    /// Merging's MIS constants of the iteration (`subpath::MergeMis`; 0 but for SPPM and VCM).
+    pub merge_vm: f32,
+    pub merge_vc: f32,
+    /// The merge kernel's normalisation 1 / (π r² N) of the iteration.
+    pub merge_normalization: f32,
+    pub pad: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -276,12 +282,17 @@ impl GpuRenderer {
                 device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
             },
         };
-        if method.merges() {
-            bail!("--method {method} runs on the CPU backend only so far");
-        }
         let layout = bind_group_layout(device, residency);
         let (pipeline, bidirectional) = if method.splats() {
-            let b = Bidirectional::new(device, &module, &layout, method, scene, &camera)?;
+            let b = Bidirectional::new(
+                device,
+                &module,
+                &layout,
+                method,
+                scene,
+                &camera,
+                faults.merge_kernel_ball,
+            )?;
             (None, Some(b))
         } else {
             (
@@ -318,10 +329,15 @@ impl GpuRenderer {
             path_origin: 0,
             path_count: 0,
             importance_missing_cos: faults.importance_missing_cos as u32,
-            shadow_threshold: match method {
-                Method::Bdpt => crate::subpath::shadow_threshold(scene, &camera),
-                _ => 0.0,
+            shadow_threshold: if method.connects() {
+                crate::subpath::shadow_threshold(scene, &camera)
+            } else {
+                0.0
             },
+            merge_vm: 0.0,
+            merge_vc: 0.0,
+            merge_normalization: 0.0,
+            pad: 0,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),

@@ -21,7 +21,7 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 12] = [
+pub const BODY: [(&str, &str); 13] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
@@ -35,6 +35,10 @@ pub const BODY: [(&str, &str); 12] = [
     (
         "light_path.wgsl",
         include_str!("../../shaders/light_path.wgsl"),
+    ),
+    (
+        "hash_grid.wgsl",
+        include_str!("../../shaders/hash_grid.wgsl"),
     ),
     ("bdpt.wgsl", include_str!("../../shaders/bdpt.wgsl")),
 ];

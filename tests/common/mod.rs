@@ -258,6 +258,39 @@ pub fn render_gpu_method(
     )
 }
 
+/// [`render_gpu_method`] for a merging method (sppm, vcm) with the radius schedule `radius`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_gpu_merging(
+    gpu: &hexray::gpu::Gpu,
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    radius: hexray::merging::MergeRadius,
+    faults: Faults,
+) -> Film {
+    let (scene, flat) = load(rel);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut r = hexray::gpu::GpuRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        &flat,
+        camera,
+        seed,
+        faults,
+        hexray::gpu::Checks::Unchecked,
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+        method,
+    )
+    .unwrap();
+    r.set_merge_radius(radius);
+    let mut film = Film::new(width, height);
+    r.render(0, spp, &mut film).unwrap();
+    film
+}
+
 /// The one GPU render every helper here ends in, with the kernel and residency the CLI uses.
 #[allow(clippy::too_many_arguments)]
 fn render_gpu_flat(

@@ -1,0 +1,171 @@
+// The hash grid over an iteration's light vertices for photon merging: `src/hash_grid.rs` again,
+// with the same names. Cells of side 2r hashed into a power of two of buckets (at least as many
+// as vertices); the vertices sorted by bucket with a counting sort in dispatches: grid_setup
+// (the bucket count from the vertex count), grid_count (an atomic count per bucket), grid_scan
+// (the exclusive prefix sum, one workgroup), grid_scatter (each vertex to its bucket's next
+// slot, by an atomic cursor), grid_sort (each bucket in the order of its vertices' light
+// subpath and length, which is the CPU's vertex order). So the buckets list the same vertices in
+// the same order on both backends, and merges sum in the same order.
+
+// The grid's constants (`GridParams`): the host writes min, inv_cell and radius2, grid_setup
+// the mask and the count.
+struct GridParams {
+    min: vec3<f32>,
+    inv_cell: f32,
+    mask: u32,
+    count: u32,
+    radius2: f32,
+    pad: u32,
+}
+
+@group(1) @binding(3) var<storage, read_write> grid_params: GridParams;
+// Bucket b's entries are grid_entries[grid_starts[b] .. grid_starts[b + 1]].
+@group(1) @binding(4) var<storage, read_write> grid_starts: array<atomic<u32>>;
+// (position, vertex index bits), by bucket.
+@group(1) @binding(5) var<storage, read_write> grid_entries: array<vec4<f32>>;
+// Each bucket's next free slot during the scatter.
+@group(1) @binding(6) var<storage, read_write> grid_cursor: array<atomic<u32>>;
+
+// Cell coordinates are clamped to +-2^30 before hashing (`CELL_LIMIT`).
+const CELL_LIMIT: f32 = 1073741824.0;
+
+// The hash of a cell: three large primes, wrapping u32 arithmetic (`hash_cell`).
+fn hash_cell(c: vec3<i32>) -> u32 {
+    let u = bitcast<vec3<u32>>(c);
+    return (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
+}
+
+// The point's position in cell units.
+fn cell_units(p: vec3<f32>) -> vec3<f32> {
+    return clamp((p - grid_params.min) * grid_params.inv_cell, vec3<f32>(-CELL_LIMIT), vec3<f32>(CELL_LIMIT));
+}
+
+// The bucket of the cell holding p.
+fn grid_bucket(p: vec3<f32>) -> u32 {
+    return hash_cell(vec3<i32>(floor(cell_units(p)))) & grid_params.mask;
+}
+
+// The buckets of the 2x2x2 cells that hold every point within r of p, each once: the first n.
+struct QueryBuckets {
+    b: array<u32, 8>,
+    n: u32,
+}
+
+fn query_buckets(p: vec3<f32>) -> QueryBuckets {
+    let u = cell_units(p);
+    let cf = floor(u);
+    let f = u - cf;
+    let c = vec3<i32>(cf);
+    // Per axis, the neighbour on the side of the nearer face.
+    let step = select(vec3<i32>(1), vec3<i32>(-1), f < vec3<f32>(0.5));
+    var out: QueryBuckets;
+    out.n = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        let offset = vec3<i32>(vec3<u32>(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u));
+        let b = hash_cell(c + offset * step) & grid_params.mask;
+        var seen = false;
+        for (var j = 0u; j < out.n; j++) {
+            seen = seen || out.b[j] == b;
+        }
+        if !seen {
+            out.b[out.n] = b;
+            out.n += 1u;
+        }
+    }
+    return out;
+}
+
+// One invocation: the vertex count of the iteration (what fits in the pool) and the buckets,
+// the next power of two at least as large.
+@compute @workgroup_size(1, 1, 1)
+fn grid_setup() {
+    let count = min(atomicLoad(&tallies[vertex_counter()]), frame.vertex_capacity);
+    grid_params.count = count;
+    let n = max(count, 1u);
+    grid_params.mask = select((2u << (31u - countLeadingZeros(n - 1u))) - 1u, 0u, n == 1u);
+}
+
+// One invocation per vertex (from frame.path_origin): count it in its bucket (grid_starts[b + 1], so that the prefix
+// sum leaves each bucket's start at grid_starts[b]).
+@compute @workgroup_size(64, 1, 1)
+fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = frame.path_origin + gid.x;
+    if i >= grid_params.count {
+        return;
+    }
+    atomicAdd(&grid_starts[grid_bucket(light_vertices[i].p) + 1u], 1u);
+}
+
+const SCAN_THREADS: u32 = 256u;
+var<workgroup> scan_partial: array<u32, 256>;
+
+// One workgroup: the inclusive prefix sum over grid_starts[1 ..= buckets], each invocation a
+// contiguous chunk (its total, a scan of the totals in the workgroup, then the chunk again).
+@compute @workgroup_size(256, 1, 1)
+fn grid_scan(@builtin(local_invocation_index) lid: u32) {
+    let buckets = grid_params.mask + 1u;
+    let chunk = (buckets + SCAN_THREADS - 1u) / SCAN_THREADS;
+    let first = 1u + lid * chunk;
+    let end = min(first + chunk, buckets + 1u);
+    var total = 0u;
+    for (var i = first; i < end; i++) {
+        total += atomicLoad(&grid_starts[i]);
+    }
+    scan_partial[lid] = total;
+    workgroupBarrier();
+    // Hillis-Steele scan of the chunk totals.
+    for (var stride = 1u; stride < SCAN_THREADS; stride <<= 1u) {
+        var add = 0u;
+        if lid >= stride {
+            add = scan_partial[lid - stride];
+        }
+        workgroupBarrier();
+        scan_partial[lid] += add;
+        workgroupBarrier();
+    }
+    var running = scan_partial[lid] - total;
+    for (var i = first; i < end; i++) {
+        running += atomicLoad(&grid_starts[i]);
+        atomicStore(&grid_starts[i], running);
+    }
+}
+
+// One invocation per vertex: into its bucket's next slot (the host has copied the starts into
+// the cursors).
+@compute @workgroup_size(64, 1, 1)
+fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = frame.path_origin + gid.x;
+    if i >= grid_params.count {
+        return;
+    }
+    let p = light_vertices[i].p;
+    let slot = atomicAdd(&grid_cursor[grid_bucket(p)], 1u);
+    grid_entries[slot] = vec4<f32>(p, bitcast<f32>(i));
+}
+
+// Whether vertex a comes before vertex b in the CPU's order: by light subpath, then length.
+fn vertex_before(a: u32, b: u32) -> bool {
+    let va = light_vertices[a];
+    let vb = light_vertices[b];
+    return va.path < vb.path || (va.path == vb.path && va.length < vb.length);
+}
+
+// One invocation per bucket: insertion sort of its entries (a few per bucket).
+@compute @workgroup_size(64, 1, 1)
+fn grid_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let b = frame.path_origin + gid.x;
+    if b > grid_params.mask {
+        return;
+    }
+    let start = atomicLoad(&grid_starts[b]);
+    let end = atomicLoad(&grid_starts[b + 1u]);
+    for (var i = start + 1u; i < end; i++) {
+        let e = grid_entries[i];
+        var j = i;
+        while j > start && vertex_before(bitcast<u32>(e.w), bitcast<u32>(grid_entries[j - 1u].w)) {
+            grid_entries[j] = grid_entries[j - 1u];
+            j -= 1u;
+        }
+        grid_entries[j] = e;
+    }
+}
