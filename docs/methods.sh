@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Method against method: relMSE against render time for path tracing, light tracing and BDPT on
+# Method against method: relMSE against render time for path tracing, light tracing, BDPT, SPPM and VCM on
 # each backend, with Mitsuba 3's `path` and `ptracer` measured in the same run (scene by scene,
 # Mitsuba's two curves right before hexray's), pictures at equal time, the cost of each method,
 # and docs/methods.md from all of it.
@@ -83,11 +83,11 @@ run() {
             overlay=(--overlay "$dir/mitsuba.csv")
         fi
         echo "== $name: hexray $backends, path, light, bdpt, $seconds s each"
-        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt \
+        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt,sppm,vcm \
             --time "$seconds" --reference "$ref" "${overlay[@]}" --out "$dir"
         "$hexray" compare "$ref" "$ref" --json > "$dir/reference.json"
         echo "== $name: pictures, 10 s each"
-        for method in path light bdpt; do
+        for method in path light bdpt sppm vcm; do
             "$hexray" render "$scene" --backend cpu --method "$method" --time 10 \
                 --width "$size" --height "$size" --seed 5 --out "out/methods/${name}_$method.exr" \
                 --quiet
@@ -145,7 +145,8 @@ print("tables (E (x − r)² = var_x + var_r) and given with them. Mitsuba 3's `
 print("(`llvm_ad_rgb`, all cores) were measured in the same run, scene by scene, just before hexray's")
 print("curves, with `../shared/mitsuba/mitsuba_side.py curve`.\n")
 print("Light tracing (`light`) sees nothing through a mirror or glass, so its error has a floor")
-print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere. The methods themselves:")
+print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere; SPPM (`sppm`) and VCM (`vcm`)")
+print("merge photons and are consistent, not unbiased (their error includes the merging bias). The methods themselves:")
 print("`src/cpu/path.rs`, `src/cpu/light_path.rs`, `src/cpu/bdpt.rs` and `src/subpath.rs`.\n")
 summary = []
 for name, scene, ref, size in scenes:
