@@ -60,6 +60,20 @@ impl MergeRadius {
     }
 }
 
+/// The merge kernel's normalisation for one iteration: the disk's 1 / (π r² N), shared by the
+/// N light subpaths; 0 at radius 0 (no merging). `ball_kernel` is the test-only fault
+/// `Faults::merge_kernel_ball`, the 3-D ball's 1 / (4/3 π r³ N).
+pub fn kernel_normalization(radius: f32, n_light_paths: u32, ball_kernel: bool) -> f32 {
+    let n = n_light_paths as f32;
+    if radius <= 0.0 {
+        0.0
+    } else if ball_kernel {
+        1.0 / (4.0 / 3.0 * std::f32::consts::PI * radius.powi(3) * n)
+    } else {
+        1.0 / (std::f32::consts::PI * radius * radius * n)
+    }
+}
+
 /// Half the diagonal of the bounding box of the scene's triangles and spheres.
 pub fn scene_radius(scene: &FlatScene) -> f32 {
     let (lo, hi) = scene_bounds(scene);

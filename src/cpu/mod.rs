@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::film::{Film, PixelStats};
 use crate::flat::FlatScene;
 use crate::hash_grid::HashGrid;
-use crate::merging::MergeRadius;
+use crate::merging::{kernel_normalization, MergeRadius};
 use crate::method::Method;
 use crate::sampling::Sampler;
 use crate::splat::Splats;
@@ -175,11 +175,7 @@ pub fn render_iterations(
         } else {
             0.0
         };
-        let merge = if method.merges() {
-            MergeMis::new(radius, n_paths, method.connects())
-        } else {
-            MergeMis::NONE
-        };
+        let merge = MergeMis::new(radius, n_paths, method.connects());
         let pass = LightPass {
             scene,
             camera,
@@ -238,12 +234,7 @@ pub fn render_iterations(
             photons: (radius > 0.0).then(|| bdpt::Photons {
                 vertices: &buffers.vertices,
                 grid: &buffers.grid,
-                // The disk kernel 1 / (π r²), shared by N light subpaths.
-                normalization: if faults.merge_kernel_ball {
-                    1.0 / (4.0 / 3.0 * std::f32::consts::PI * radius.powi(3) * n_paths as f32)
-                } else {
-                    1.0 / (std::f32::consts::PI * radius * radius * n_paths as f32)
-                },
+                normalization: kernel_normalization(radius, n_paths, faults.merge_kernel_ball),
             }),
         };
         let tiles_x = w.div_ceil(TILE);

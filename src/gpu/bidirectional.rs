@@ -22,10 +22,12 @@
 //! pass. An iteration that overflows the pool is traced again after the pool has grown; one
 //! that cannot fit in what the device binds ends the render with a clear error.
 
-use super::render::{compute_pipeline, Frame, GpuRenderer, MAX_PASS_SPP, WORKGROUP};
+use super::render::{
+    buffer_entries, compute_pipeline, Frame, GpuRenderer, MAX_PASS_SPP, WORKGROUP,
+};
 use crate::film::{Film, PixelStats};
 use crate::hash_grid::GridParams;
-use crate::merging::MergeRadius;
+use crate::merging::{kernel_normalization, MergeRadius};
 use crate::method::Method;
 use crate::subpath::{LightVertex, MergeMis};
 use anyhow::{bail, Result};
@@ -144,14 +146,7 @@ impl Pool {
             &grid_entries,
             &grid_cursor,
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
+        let entries = buffer_entries(buffers.into_iter());
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("light subpaths"),
             layout,
@@ -455,23 +450,10 @@ impl GpuRenderer {
         for (slot, &s) in iterations.iter().enumerate() {
             // Merging's radius this iteration, its constants in the MIS weights and the
             // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
-            let (radius, merge, normalization) = match &b.merging {
-                Some(m) if m.radius.at(s) > 0.0 => {
-                    let r = m.radius.at(s);
-                    let n = pixels as f32;
-                    let normalization = if m.ball_kernel {
-                        1.0 / (4.0 / 3.0 * std::f32::consts::PI * r.powi(3) * n)
-                    } else {
-                        1.0 / (std::f32::consts::PI * r * r * n)
-                    };
-                    (
-                        r,
-                        MergeMis::new(r, pixels as u32, self.method.connects()),
-                        normalization,
-                    )
-                }
-                _ => (0.0, MergeMis::NONE, 0.0),
-            };
+            let radius = b.merging.as_ref().map_or(0.0, |m| m.radius.at(s));
+            let merge = MergeMis::new(radius, pixels as u32, self.method.connects());
+            let ball = b.merging.as_ref().is_some_and(|m| m.ball_kernel);
+            let normalization = kernel_normalization(radius, pixels as u32, ball);
             let frame = Frame {
                 first_sample: s,
                 sample_count: 1,

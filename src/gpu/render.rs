@@ -203,6 +203,19 @@ pub(super) fn compute_pipeline(
     })
 }
 
+/// Bind-group entries 0, 1, … for whole buffers, in order.
+pub(super) fn buffer_entries<'a>(
+    buffers: impl Iterator<Item = &'a wgpu::Buffer>,
+) -> Vec<wgpu::BindGroupEntry<'a>> {
+    buffers
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect()
+}
+
 /// The bindings of `shaders/scene.wgsl`: the six scene arrays (storage or uniform), the frame
 /// (uniform), the pass sums and the running mean (read-write storage), the output texture.
 fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindGroupLayout {
@@ -388,14 +401,7 @@ impl GpuRenderer {
             upload(device, residency, "bvh nodes", &scene.nodes),
             upload(device, residency, "primitive refs", &packed_prims(scene)),
         ];
-        let mut entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
+        let mut entries = buffer_entries(buffers.iter());
         entries.push(wgpu::BindGroupEntry {
             binding: 6,
             resource: frame_buffer.as_entire_binding(),

@@ -89,21 +89,18 @@ pub fn render_cpu_merging(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
-    let camera = Camera::new(&scene.desc.camera, width, height);
-    let mut film = Film::new(width, height);
-    let mut buffers = LightPassBuffers::new(&flat, &camera, method, radius);
-    render_iterations(
+    render_cpu_flat_radius(
+        &scene,
         &flat,
-        &camera,
-        seed,
-        0,
+        width,
+        height,
         spp,
+        seed,
         method,
+        1,
         faults,
-        &mut buffers,
-        &mut film,
-    );
-    film
+        Some(radius),
+    )
 }
 
 /// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
@@ -120,15 +117,39 @@ fn render_cpu_flat(
     light_samples: u32,
     faults: Faults,
 ) -> Film {
+    render_cpu_flat_radius(
+        scene,
+        flat,
+        width,
+        height,
+        spp,
+        seed,
+        method,
+        light_samples,
+        faults,
+        None,
+    )
+}
+
+/// [`render_cpu_flat`] with a merge radius schedule (None: the scene's default).
+#[allow(clippy::too_many_arguments)]
+fn render_cpu_flat_radius(
+    scene: &Scene,
+    flat: &FlatScene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    light_samples: u32,
+    faults: Faults,
+    radius: Option<hexray::merging::MergeRadius>,
+) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     if method.splats() {
-        let mut buffers = LightPassBuffers::new(
-            flat,
-            &camera,
-            method,
-            hexray::merging::MergeRadius::default_for(flat),
-        );
+        let radius = radius.unwrap_or_else(|| hexray::merging::MergeRadius::default_for(flat));
+        let mut buffers = LightPassBuffers::new(flat, &camera, method, radius);
         render_iterations(
             flat,
             &camera,
@@ -272,23 +293,19 @@ pub fn render_gpu_merging(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
-    let camera = Camera::new(&scene.desc.camera, width, height);
-    let mut r = hexray::gpu::GpuRenderer::new(
-        &gpu.device,
-        &gpu.queue,
+    render_gpu_flat_radius(
+        gpu,
+        &scene,
         &flat,
-        camera,
+        width,
+        height,
+        spp,
         seed,
-        faults,
-        hexray::gpu::Checks::Unchecked,
-        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
         method,
+        1,
+        faults,
+        Some(radius),
     )
-    .unwrap();
-    r.set_merge_radius(radius);
-    let mut film = Film::new(width, height);
-    r.render(0, spp, &mut film).unwrap();
-    film
 }
 
 /// The one GPU render every helper here ends in, with the kernel and residency the CLI uses.
@@ -305,6 +322,36 @@ fn render_gpu_flat(
     light_samples: u32,
     faults: Faults,
 ) -> Film {
+    render_gpu_flat_radius(
+        gpu,
+        scene,
+        flat,
+        width,
+        height,
+        spp,
+        seed,
+        method,
+        light_samples,
+        faults,
+        None,
+    )
+}
+
+/// [`render_gpu_flat`] with a merge radius schedule (None: the scene's default).
+#[allow(clippy::too_many_arguments)]
+fn render_gpu_flat_radius(
+    gpu: &hexray::gpu::Gpu,
+    scene: &Scene,
+    flat: &FlatScene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    light_samples: u32,
+    faults: Faults,
+    radius: Option<hexray::merging::MergeRadius>,
+) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut r = hexray::gpu::GpuRenderer::new(
         &gpu.device,
@@ -319,6 +366,9 @@ fn render_gpu_flat(
     )
     .unwrap();
     r.set_light_samples(light_samples);
+    if let Some(radius) = radius {
+        r.set_merge_radius(radius);
+    }
     let mut film = Film::new(width, height);
     r.render(0, spp, &mut film).unwrap();
     film
