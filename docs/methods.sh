@@ -143,7 +143,10 @@ print(f"time after warm-up ({budget:.0f} s per curve), on the machine in each ch
 print("reference's own noise (mean var_r/(r² + 0.01), from its variance file) is subtracted in the")
 print("tables (E (x − r)² = var_x + var_r) and given with them. Mitsuba 3's `path` and `ptracer`")
 print("(`llvm_ad_rgb`, all cores) were measured in the same run, scene by scene, just before hexray's")
-print("curves, with `../shared/mitsuba/mitsuba_side.py curve`.\n")
+print("curves, with `../shared/mitsuba/mitsuba_side.py curve`; not alternated with them. Its curves")
+print("double the samples per wave and stop at the last wave that fits the budget, so a Mitsuba row")
+print("gives its time: it is relMSE after that many seconds, not after the budget, and no ratio to it")
+print("is drawn here. For an equal-time ratio against Mitsuba, alternate the two in one run.\n")
 print("Light tracing (`light`) sees nothing through a mirror or glass, so its error has a floor")
 print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere; SPPM (`sppm`) and VCM (`vcm`)")
 print("merge photons and are consistent, not unbiased (their error includes the merging bias). The methods themselves:")
@@ -161,11 +164,14 @@ for name, scene, ref, size in scenes:
     print(f"![{name}: relMSE against time]({os.path.basename(out)}/{name}/relmse_vs_seconds.png)\n")
     print(f"| series | relMSE at {budget:.0f} s | minus the reference's noise | ratio to hexray path (same backend) |")
     print("| --- | --- | --- | --- |")
-    vals = {}
+    vals, early = {}, {}
     for b, pts in s.items():
         v = at(pts, budget)
         if v is None and pts and pts[-1][0] < budget:
+            # The series' last wave ended before the budget (the next doubling would not have
+            # fit): its value there, marked with its time, not an equal-time figure.
             v = pts[-1][1]
+            early[b] = pts[-1][0]
         vals[b] = v
     for b, v in vals.items():
         c = None if v is None else v - (noise or 0.0)
@@ -175,7 +181,8 @@ for name, scene, ref, size in scenes:
         if c is not None and base is not None:
             cb = base - (noise or 0.0)
             ratio = c / cb if cb > 0 else None
-        print(f"| {b} | {fmt(v)} | {fmt(c)} | {'–' if ratio is None else f'{ratio:.2f}'} |")
+        when = f" (at {early[b]:.1f} s)" if b in early else ""
+        print(f"| {b}{when} | {fmt(v)} | {fmt(c)} | {'–' if ratio is None else f'{ratio:.2f}'} |")
         summary.append((name, b, c, ratio))
     print()
     pics = [m for m in ("path", "light", "bdpt") if os.path.exists(f"{out}/{name}/{m}.png")]
