@@ -207,6 +207,11 @@ fn triangle_normal(tri: Triangle) -> vec3<f32> {
     return tri.n;
 }
 
+// The unit normal at a unit direction d from the centre: d, or -d when flipped (`Sphere::normal`).
+fn sphere_normal(sphere: Sphere, d: vec3<f32>) -> vec3<f32> {
+    return select(d, -d, sphere.flip != 0u);
+}
+
 // A sphere hit projected back onto the sphere; the bound is gamma(5)|p_local| plus the
 // rounding of adding the centre back.
 fn sphere_point(ray: Ray, sphere: Sphere, t: f32) -> SurfaceHit {
@@ -214,7 +219,7 @@ fn sphere_point(ray: Ray, sphere: Sphere, t: f32) -> SurfaceHit {
     local = local * (sphere.radius / length(local));
     let p = sphere.center + local;
     let p_err = gamma(5.0) * abs(local) + gamma(2.0) * abs(p);
-    return SurfaceHit(t, p, p_err, local / sphere.radius, sphere.material, 0u);
+    return SurfaceHit(t, p, p_err, sphere_normal(sphere, local / sphere.radius), sphere.material, 0u);
 }
 
 // The slab test against the four children's boxes of a node at once, with pbrt-v4's

@@ -5,7 +5,7 @@ struct LightSample {
     p_err: vec3<f32>,
     n: vec3<f32>,
     le: vec3<f32>,
-    // pmf(triangle) / area.
+    // pmf(emitter) / area.
     pdf_area: f32,
 }
 
@@ -24,18 +24,34 @@ fn choose_emitter(u: f32) -> u32 {
     return lo;
 }
 
-// An emitter triangle chosen in proportion to its power, then a point uniformly on its area.
+// An emitter chosen in proportion to its power, then a point uniformly on its area: on a
+// triangle by the square-root warp, on a sphere by a uniform direction from its centre.
 fn sample_emitter(u_select: f32, u1: f32, u2: f32) -> LightSample {
     let row = emitters[choose_emitter(u_select)];
-    let tri = triangles[row.triangle];
+    let pdf_area = row.pmf / row.area;
+    if (row.prim & PRIM_SPHERE_BIT) != 0u {
+        let sphere = spheres[row.prim & ~PRIM_SPHERE_BIT];
+        let d = sample_uniform_sphere(u1, u2);
+        let local = sphere.radius * d;
+        let p = sphere.center + local;
+        let p_err = gamma(5.0) * abs(local) + gamma(2.0) * abs(p);
+        return LightSample(p, p_err, sphere_normal(sphere, d), materials[sphere.material].emission, pdf_area);
+    }
+    let tri = triangles[row.prim];
     let b = sample_uniform_triangle(u1, u2);
     let pe = triangle_point(tri, b.y, b.z);
-    return LightSample(pe.p, pe.p_err, triangle_normal(tri), materials[tri.material].emission, row.pmf / row.area);
+    return LightSample(pe.p, pe.p_err, triangle_normal(tri), materials[tri.material].emission, pdf_area);
 }
 
-// The area density with which sample_emitter picks points on triangle tri.
-fn emitter_pdf_area(tri: u32) -> f32 {
-    let row = triangles[tri].emitter;
+// The area density with which sample_emitter picks points on primitive prim (a `prims`
+// reference, as SurfaceHit.prim).
+fn emitter_pdf_area(prim: u32) -> f32 {
+    var row: u32;
+    if (prim & PRIM_SPHERE_BIT) != 0u {
+        row = spheres[prim & ~PRIM_SPHERE_BIT].emitter;
+    } else {
+        row = triangles[prim].emitter;
+    }
     if row == NOT_AN_EMITTER {
         return 0.0;
     }

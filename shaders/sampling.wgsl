@@ -109,6 +109,14 @@ fn sample_uniform_triangle(u1: f32, u2: f32) -> vec3<f32> {
     return vec3<f32>(1.0 - b1 - b2, b1, b2);
 }
 
+// Uniform direction on the unit sphere (z uniform in [-1, 1]), pdf = 1 / (4 pi).
+fn sample_uniform_sphere(u1: f32, u2: f32) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u1;
+    let s = sqrt(max(1.0 - z * z, 0.0));
+    let phi = 2.0 * PI * u2;
+    return vec3<f32>(s * cos(phi), s * sin(phi), z);
+}
+
 struct Basis {
     t: vec3<f32>,
     b: vec3<f32>,

@@ -17,9 +17,9 @@ struct Sphere {
     center: vec3<f32>,
     radius: f32,
     material: u32,
+    emitter: u32,
+    flip: u32,
     pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
 struct Material {
@@ -30,7 +30,7 @@ struct Material {
 }
 
 struct Emitter {
-    triangle: u32,
+    prim: u32,
     area: f32,
     cdf: f32,
     pmf: f32,

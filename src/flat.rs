@@ -69,16 +69,43 @@ impl Triangle {
     }
 }
 
-/// A sphere. Two vec4s.
+/// A sphere: its row in the emitter table (as a triangle's), and whether its normals point
+/// inward (`flip`, 1 or 0; Mitsuba's `flip_normals`), which makes an emitting sphere light its
+/// inside. Two vec4s.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct Sphere {
     pub center: [f32; 3],
     pub radius: f32,
     pub material: u32,
+    pub emitter: u32,
+    pub flip: u32,
     pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+}
+
+impl Default for Sphere {
+    fn default() -> Sphere {
+        Sphere {
+            center: [0.0; 3],
+            radius: 0.0,
+            material: 0,
+            emitter: NOT_AN_EMITTER,
+            flip: 0,
+            pad0: 0,
+        }
+    }
+}
+
+impl Sphere {
+    /// The unit normal at a unit direction `d` from the centre: `d`, or `-d` when flipped.
+    #[inline]
+    pub fn normal(&self, d: Vec3) -> Vec3 {
+        if self.flip != 0 {
+            -d
+        } else {
+            d
+        }
+    }
 }
 
 /// A material: `color` is the albedo (diffuse, and an emitter's optional reflectance), the
@@ -92,12 +119,13 @@ pub struct Material {
     pub ior: f32,
 }
 
-/// One row of the emitter table: a triangle that emits, its area, and the discrete distribution
-/// that picks emitters in proportion to their power (area x mean radiance). One vec4.
+/// One row of the emitter table: a primitive that emits (a `prims` reference: a triangle's
+/// index, or a sphere's with [`PRIM_SPHERE_BIT`]), its area, and the discrete distribution that
+/// picks emitters in proportion to their power (area x mean radiance). One vec4.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Emitter {
-    pub triangle: u32,
+    pub prim: u32,
     pub area: f32,
     /// Cumulative probability up to and including this row; the last row holds exactly 1.
     pub cdf: f32,
@@ -222,11 +250,13 @@ impl FlatScene {
                 center: f3(s.center),
                 radius: s.radius as f32,
                 material: material_id(&s.material),
+                flip: u32::from(s.flip_normals),
                 ..Default::default()
             })
             .collect();
 
-        let emitters = build_emitter_table(&mut triangles, &materials);
+        let mut spheres = spheres;
+        let emitters = build_emitter_table(&mut triangles, &mut spheres, &materials);
         let (nodes, prims) = bvh::build(&triangles, &spheres);
         FlatScene {
             packs: bvh::triangle_packs(&triangles, &prims),
@@ -252,30 +282,49 @@ impl FlatScene {
     }
 }
 
+/// Area of a sphere in f32, 4 pi r^2.
+pub fn sphere_area(s: &Sphere) -> f32 {
+    4.0 * std::f32::consts::PI * s.radius * s.radius
+}
+
 /// Area of a triangle in f32, as the integrators compute it.
 pub fn triangle_area(t: &Triangle) -> f32 {
     let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
     0.5 * (v1 - v0).cross(v2 - v0).length()
 }
 
-/// The emitter table: every triangle whose material emits, chosen with probability proportional
-/// to its power (area x mean of the RGB radiance; the pi of Lambertian emission is common to all
-/// and cancels). Sets each emitting triangle's `emitter` row.
-fn build_emitter_table(triangles: &mut [Triangle], materials: &[Material]) -> Vec<Emitter> {
+/// The emitter table: every triangle, then every sphere, whose material emits, chosen with
+/// probability proportional to its power (area x mean of the RGB radiance; the pi of Lambertian
+/// emission is common to all and cancels). Sets each emitting primitive's `emitter` row.
+fn build_emitter_table(
+    triangles: &mut [Triangle],
+    spheres: &mut [Sphere],
+    materials: &[Material],
+) -> Vec<Emitter> {
     let mut rows = Vec::new();
     let mut powers = Vec::new();
-    for (i, t) in triangles.iter().enumerate() {
-        let m = &materials[t.material as usize];
+    let mean_emission = |material: u32| {
+        let m = &materials[material as usize];
         let mean_le = (m.emission[0] + m.emission[1] + m.emission[2]) as f64 / 3.0;
-        if m.kind == KIND_EMITTER && mean_le > 0.0 {
-            let area = triangle_area(t);
-            rows.push(Emitter {
-                triangle: i as u32,
-                area,
-                cdf: 0.0,
-                pmf: 0.0,
-            });
-            powers.push(area as f64 * mean_le);
+        (m.kind == KIND_EMITTER && mean_le > 0.0).then_some(mean_le)
+    };
+    let mut push = |prim: u32, area: f32, mean_le: f64| {
+        rows.push(Emitter {
+            prim,
+            area,
+            cdf: 0.0,
+            pmf: 0.0,
+        });
+        powers.push(area as f64 * mean_le);
+    };
+    for (i, t) in triangles.iter().enumerate() {
+        if let Some(mean_le) = mean_emission(t.material) {
+            push(i as u32, triangle_area(t), mean_le);
+        }
+    }
+    for (i, s) in spheres.iter().enumerate() {
+        if let Some(mean_le) = mean_emission(s.material) {
+            push(i as u32 | PRIM_SPHERE_BIT, sphere_area(s), mean_le);
         }
     }
     let total: f64 = powers.iter().sum();
@@ -289,7 +338,11 @@ fn build_emitter_table(triangles: &mut [Triangle], materials: &[Material]) -> Ve
         last.cdf = 1.0;
     }
     for (k, row) in rows.iter().enumerate() {
-        triangles[row.triangle as usize].emitter = k as u32;
+        if row.prim & PRIM_SPHERE_BIT != 0 {
+            spheres[(row.prim & !PRIM_SPHERE_BIT) as usize].emitter = k as u32;
+        } else {
+            triangles[row.prim as usize].emitter = k as u32;
+        }
     }
     rows
 }

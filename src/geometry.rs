@@ -340,7 +340,8 @@ pub struct SurfaceHit {
     pub p: Vec3,
     /// Conservative bound on the absolute error of each coordinate of `p`.
     pub p_err: Vec3,
-    /// Unit geometric normal: (v1 - v0) x (v2 - v0) for triangles, outward for spheres.
+    /// Unit geometric normal: (v1 - v0) x (v2 - v0) for triangles, outward for spheres
+    /// (inward for a flipped one).
     pub n: Vec3,
     pub material: u32,
     /// The `prims` entry that was hit (triangle index, or sphere index with the sphere bit).
@@ -411,7 +412,7 @@ pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
     let local = local * (sphere.radius / local.length());
     let p = center + local;
     let p_err = gamma(5) * local.abs() + gamma(2) * p.abs();
-    (p, p_err, local / sphere.radius)
+    (p, p_err, sphere.normal(local / sphere.radius))
 }
 
 /// The slab test (Kay and Kajiya) against the four children's boxes of a BVH node at once, with

@@ -1,9 +1,11 @@
-//! Area lights: choosing an emitter triangle by power, a uniform point on it, and the pdf of that
-//! choice with respect to solid angle at the receiving point.
+//! Area lights: choosing an emitter (a triangle or a sphere) by power, a uniform point on it, and
+//! the pdf of that choice with respect to solid angle at the receiving point.
 
-use crate::flat::{FlatScene, NOT_AN_EMITTER};
-use crate::geometry::{triangle_normal, triangle_point};
-use crate::sampling::{orthonormal_basis, sample_cosine_hemisphere, sample_uniform_triangle};
+use crate::flat::{FlatScene, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
+use crate::geometry::{gamma, triangle_normal, triangle_point};
+use crate::sampling::{
+    orthonormal_basis, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
+};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -12,7 +14,7 @@ use std::f32::consts::FRAC_1_PI;
 pub struct LightSample {
     pub p: Vec3,
     pub p_err: Vec3,
-    /// Unit normal of the emitting side, (v1 - v0) x (v2 - v0).
+    /// Unit normal of the emitting side: (v1 - v0) x (v2 - v0), or the sphere's normal.
     pub n: Vec3,
     /// Emitted radiance toward the front.
     pub le: Vec3,
@@ -36,11 +38,27 @@ pub fn choose_emitter(scene: &FlatScene, u: f32) -> usize {
     lo
 }
 
-/// Chooses an emitter triangle in proportion to its power, then a point uniformly on its area.
+/// Chooses an emitter in proportion to its power, then a point uniformly on its area: on a
+/// triangle by the square-root warp, on a sphere by a uniform direction from its centre (the
+/// point's error bound is `sphere_point`'s).
 #[inline]
 pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> LightSample {
     let row = scene.emitters[choose_emitter(scene, u_select)];
-    let tri = &scene.triangles[row.triangle as usize];
+    let pdf_area = row.pmf / row.area;
+    if row.prim & PRIM_SPHERE_BIT != 0 {
+        let sphere = &scene.spheres[(row.prim & !PRIM_SPHERE_BIT) as usize];
+        let d = sample_uniform_sphere(u1, u2);
+        let local = sphere.radius * d;
+        let p = Vec3::from(sphere.center) + local;
+        return LightSample {
+            p,
+            p_err: gamma(5) * local.abs() + gamma(2) * p.abs(),
+            n: sphere.normal(d),
+            le: Vec3::from(scene.materials[sphere.material as usize].emission),
+            pdf_area,
+        };
+    }
+    let tri = &scene.triangles[row.prim as usize];
     let (_, b1, b2) = sample_uniform_triangle(u1, u2);
     let (p, p_err) = triangle_point(tri, b1, b2);
     LightSample {
@@ -48,7 +66,7 @@ pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> Lig
         p_err,
         n: triangle_normal(tri),
         le: Vec3::from(scene.materials[tri.material as usize].emission),
-        pdf_area: row.pmf / row.area,
+        pdf_area,
     }
 }
 
@@ -82,11 +100,15 @@ pub fn sample_emission(scene: &FlatScene, u_point: [f32; 4], u_dir: [f32; 4]) ->
     }
 }
 
-/// The area density with which [`sample_emitter`] picks points on triangle `tri` (0 for a
-/// triangle that is not in the emitter table).
+/// The area density with which [`sample_emitter`] picks points on primitive `prim` (a `prims`
+/// reference, as `SurfaceHit::prim`; 0 for a primitive that is not in the emitter table).
 #[inline]
-pub fn emitter_pdf_area(scene: &FlatScene, tri: u32) -> f32 {
-    let row = scene.triangles[tri as usize].emitter;
+pub fn emitter_pdf_area(scene: &FlatScene, prim: u32) -> f32 {
+    let row = if prim & PRIM_SPHERE_BIT != 0 {
+        scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize].emitter
+    } else {
+        scene.triangles[prim as usize].emitter
+    };
     if row == NOT_AN_EMITTER {
         return 0.0;
     }

@@ -158,6 +158,16 @@ pub fn sample_uniform_triangle(u1: f32, u2: f32) -> (f32, f32, f32) {
     (1.0 - b1 - b2, b1, b2)
 }
 
+/// Uniform direction on the unit sphere (Archimedes: z uniform in [-1, 1]), pdf = 1 / (4 pi)
+/// with respect to solid angle, so a point on a sphere of radius r has area pdf 1 / (4 pi r^2).
+#[inline]
+pub fn sample_uniform_sphere(u1: f32, u2: f32) -> Vec3 {
+    let z = 1.0 - 2.0 * u1;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u2;
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
 /// An orthonormal basis (t, b) around a unit normal n: Duff et al., "Building an Orthonormal
 /// Basis, Revisited", JCGT 6(1), 2017 (branchless, no singularity).
 #[inline]

@@ -50,12 +50,15 @@ fn cases() -> Vec<Case> {
             on_line: Some("\"albedo\""),
         },
         Case {
-            name: "emitting sphere",
+            name: "emitting sphere of zero area in f32",
             base: ROOM,
-            edit: |s| s["spheres"][0]["material"] = json!("light"),
-            path: "spheres[0].material",
-            message: "a sphere cannot emit",
-            on_line: Some("\"light\""),
+            edit: |s| {
+                s["spheres"][0]["material"] = json!("light");
+                s["spheres"][0]["radius"] = json!(1e-30);
+            },
+            path: "spheres[0].radius",
+            message: "zero area in f32",
+            on_line: Some("1e-30"),
         },
         Case {
             name: "number beyond f32",

@@ -53,9 +53,9 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             center,
             radius,
             material,
-            pad0,
-            pad1,
-            pad2
+            emitter,
+            flip,
+            pad0
         }),
         rust_layout!(Material {
             color,
@@ -64,7 +64,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             ior
         }),
         rust_layout!(Emitter {
-            triangle,
+            prim,
             area,
             cdf,
             pmf
@@ -156,14 +156,14 @@ fn a_reordered_field_is_caught() {
     #[repr(C)]
     struct Emitter {
         area: f32,
-        triangle: u32,
+        prim: u32,
         cdf: f32,
         pmf: f32,
     }
     let (module, _) = validate(&source(Residency::Storage, ArrayLengths::default())).unwrap();
     let (_, _, fields) = rust_layout!(Emitter {
         area,
-        triangle,
+        prim,
         cdf,
         pmf
     });

@@ -54,6 +54,22 @@ def write(name, data):
 for rho, tag in ((0.5, "0_5"), (0.8, "0_8"), (0.95, "0_95")):
     write(f"diffuse_{tag}", scene(f"furnace_diffuse_{tag}", rho, [],
                                    f"white furnace, albedo {rho}"))
+# The merging furnace: the inside of a sphere of radius 1 (normals flipped inward) that emits
+# Le = 1 - rho and reflects with albedo rho, seen from its centre. Besides L = 1, a sphere has the
+# property photon merging needs to be exact: the surface within chord distance r of any point on
+# it is a cap of area exactly pi r^2 (Archimedes: a cap of height h has area 2 pi R h, and chord
+# r gives h = r^2 / 2R), so a disk kernel's normalisation is exact at every radius.
+sphere = scene("furnace_sphere", 0.5, [], "white furnace inside a sphere, albedo 0.5")
+sphere["notes"] = [
+    "inside of an emitting sphere with albedo rho and radiance 1 - rho: the exact image is 1, "
+    "and the area within chord distance r of any surface point is exactly pi r^2"
+]
+sphere["camera"]["eye"] = [0.0, 0.0, 0.0]
+sphere["triangles"] = []
+sphere["spheres"] = [
+    {"center": [0.0, 0.0, 0.0], "radius": 1.0, "material": "wall", "flip_normals": True}
+]
+write("sphere", sphere)
 write("mirror_sphere", scene("furnace_mirror_sphere", 0.5,
                              [{"center": [0.4, 0.0, 0.0], "radius": 0.45, "material": "mirror"}],
                              "mirror sphere of reflectance 1 in a furnace"))

@@ -117,8 +117,12 @@ pub struct SphereDesc {
     pub center: [f64; 3],
     /// Radius, > 0.
     pub radius: f64,
-    /// The name of a material in `materials` (not an emitter: lights are triangles).
+    /// The name of a material in `materials`; an emitter makes the sphere an area light.
     pub material: String,
+    /// Normals point inward (Mitsuba's `flip_normals`): an emitting sphere then lights its
+    /// inside, and a glass sphere becomes a bubble of air in glass.
+    #[serde(default)]
+    pub flip_normals: bool,
 }
 
 /// An axis-aligned box, expanded to 12 triangles whose normals face outward.

@@ -86,13 +86,8 @@ fn suggest(name: &str, desc: &SceneDesc) -> String {
     }
 }
 
-/// Resolves a material reference; spheres cannot be emitters (lights are triangles).
-fn check_material_ref(
-    name: &str,
-    path: &JsonPath,
-    desc: &SceneDesc,
-    allow_emitter: bool,
-) -> Result<(), Issue> {
+/// Resolves a material reference.
+fn check_material_ref(name: &str, path: &JsonPath, desc: &SceneDesc) -> Result<(), Issue> {
     let known: Vec<&str> = desc.materials.keys().map(String::as_str).collect();
     match desc.materials.get(name) {
         None => Err(issue(
@@ -103,12 +98,6 @@ fn check_material_ref(
                 suggest(name, desc),
                 known.join(", ")
             ),
-        )),
-        Some(MaterialDesc::Emitter { .. }) if !allow_emitter => Err(issue(
-            path.clone(),
-            format!("material `{name}` is an emitter, and a sphere cannot emit"),
-            "area lights are triangles: make the light out of triangles, or give the sphere a \
-             diffuse, mirror or glass material",
         )),
         Some(_) => Ok(()),
     }
@@ -201,7 +190,7 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         for (k, v) in t.v.iter().enumerate() {
             check_vec(v, &p.key("v").index(k))?;
         }
-        check_material_ref(&t.material, &p.key("material"), desc, true)?;
+        check_material_ref(&t.material, &p.key("material"), desc)?;
         // The renderer sees the vertices rounded to f32: a triangle far from the origin can
         // collapse there although its f64 vertices are distinct.
         let v = t.v.map(|p| p.map(|x| x as f32 as f64));
@@ -218,7 +207,7 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         }
     }
 
-    // Spheres: finite centre, positive radius, a non-emitting material.
+    // Spheres: finite centre, positive radius, a material that exists, an emitter's area > 0.
     let sp = root.key("spheres");
     for (i, s) in desc.spheres.iter().enumerate() {
         let p = sp.index(i);
@@ -230,7 +219,24 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
                 "give the sphere a positive radius",
             ));
         }
-        check_material_ref(&s.material, &p.key("material"), desc, false)?;
+        check_material_ref(&s.material, &p.key("material"), desc)?;
+        // An emitting sphere is sampled by area: 4 pi r^2 must be > 0 in f32, as the emitter
+        // table computes it.
+        let emits = matches!(
+            desc.materials.get(&s.material),
+            Some(MaterialDesc::Emitter { .. })
+        );
+        let radius = s.radius as f32;
+        if emits && 4.0 * std::f32::consts::PI * radius * radius == 0.0 {
+            return Err(issue(
+                p.key("radius"),
+                format!(
+                    "an emitting sphere of radius {} has zero area in f32",
+                    s.radius
+                ),
+                "give the light a radius whose square is a normal 32-bit float (> 1e-19)",
+            ));
+        }
     }
 
     // Boxes: finite corners with min < max on every axis.
@@ -254,22 +260,25 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
                  thickness or a position nearer the origin",
             ));
         }
-        check_material_ref(&b.material, &p.key("material"), desc, true)?;
+        check_material_ref(&b.material, &p.key("material"), desc)?;
     }
 
-    // At least one triangle that emits light, or the image is black by construction.
+    // At least one primitive that emits light, or the image is black by construction.
     let emits = |name: &str| {
         matches!(desc.materials.get(name),
             Some(MaterialDesc::Emitter { radiance, .. }) if radiance.iter().any(|&x| x > 0.0))
     };
     if !desc.triangles.iter().any(|t| emits(&t.material))
         && !desc.boxes.iter().any(|b| emits(&b.material))
+        && !desc.spheres.iter().any(|s| emits(&s.material))
     {
         return Err(issue(
             root.key("triangles"),
-            "the scene has no emitter: no triangle uses an emitter material with radiance > 0",
+            "the scene has no emitter: no triangle, box or sphere uses an emitter material with \
+             radiance > 0",
             "add a light: triangles whose material has \"type\": \"emitter\" and a positive \
-             radiance, wound so that (v1 - v0) x (v2 - v0) faces the scene",
+             radiance, wound so that (v1 - v0) x (v2 - v0) faces the scene, or a sphere of that \
+             material",
         ));
     }
     Ok(())
