@@ -6,7 +6,9 @@
 #
 #   docs/methods.sh references   # deep 256x256 BDPT references of tncg15_room and glass_room
 #                                # (out/methods/refs, 25 min each on 2 cores; not committed)
-#   docs/methods.sh run          # curves, Mitsuba, pictures, bench -> docs/methods/ (~40 min)
+#   docs/methods.sh run          # curves, Mitsuba, pictures, bench -> docs/methods/
+#                                # (~55 min)
+#   docs/methods.sh readme       # only the README's picture (the default method against path 64 spp)
 #   docs/methods.sh markdown     # docs/methods.md again from what `run` left in docs/methods/
 #   ONLY=caustic SECONDS_PER_CURVE=5 docs/methods.sh run   # one scene, short curves (a trial)
 #
@@ -18,7 +20,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 hexray=${HEXRAY:-target/release/hexray}
 mitsuba_python=${MITSUBA_PYTHON:-$HOME/mi/bin/python}
-mitsuba_side=${MITSUBA_SIDE:-../shared/mitsuba/mitsuba_side.py}
+mitsuba_curve_py=${MITSUBA_CURVE:-benches/mitsuba_curve.py}
 out=docs/methods
 refs=out/methods/refs
 seconds=${SECONDS_PER_CURVE:-30}
@@ -51,18 +53,19 @@ references() {
 }
 
 have_mitsuba() {
-    [ -x "$mitsuba_python" ] && [ -f "$mitsuba_side" ]
+    [ -x "$mitsuba_python" ] && "$mitsuba_python" -c 'import mitsuba' 2> /dev/null
 }
 
 have_gpu() {
-    "$hexray" info | grep -q '^\['
+    "$hexray" info | grep '^\[' > /dev/null
 }
 
-# Mitsuba's curve of one integrator, its `variant` column renamed to the integrator.
+# Mitsuba's curve of one integrator (benches/mitsuba_curve.py: doubling waves, then one that
+# ends just past the budget).
 mitsuba_curve() {
     local scene=$1 ref=$2 size=$3 integrator=$4
-    "$mitsuba_python" "$mitsuba_side" curve "$scene" --ref "$ref" --res "$size" \
-        --seconds "$seconds" --integrator "$integrator" | sed "s/,llvm_ad_rgb,/,$integrator,/"
+    "$mitsuba_python" "$mitsuba_curve_py" "$scene" --ref "$ref" --res "$size" \
+        --seconds "$seconds" --integrator "$integrator"
 }
 
 run() {
@@ -94,16 +97,33 @@ run() {
             cp "out/methods/${name}_$method.png" "$dir/$method.png"
         done
     done
-    echo "== the README's picture: tncg15_room 512x512, path and bdpt for 15 s each"
-    for method in path bdpt; do
-        "$hexray" render scenes/tncg15_room.json --backend cpu --method "$method" --time 15 \
-            --seed 5 --out "out/methods/readme_$method.exr" --quiet
-        cp "out/methods/readme_$method.png" "$out/tncg15_room_512_$method.png"
-    done
     echo "== cost: hexray bench, 256x256, 32 samples or iterations"
-    "$hexray" bench --backend "${backends}" --method path,light,bdpt --spp 32 \
+    "$hexray" bench --backend "${backends}" --method path,light,bdpt,sppm,vcm --spp 32 \
         --out "$out/bench.json" > "$out/bench.txt"
     markdown
+}
+
+# The README's picture: `hexray render`'s default scene and size (tncg15_room, 512x512) with
+# the default method, for as long as the old default (path, 64 spp) takes, both on the CPU
+# and compared with the 256x256 reference as 2x2 block means.
+readme() {
+    local log=out/methods/readme_path.log
+    mkdir -p out/methods
+    echo "== the README's picture: path 64 spp, then the default method for as long"
+    "$hexray" render scenes/tncg15_room.json --backend cpu --method path --spp 64 --seed 5 --variance \
+        --out out/methods/readme_path.exr 2> "$log"
+    local t
+    t=$(sed -n 's/^rendered 64 spp with path in \([0-9.]*\) s.*/\1/p' "$log")
+    [ -n "$t" ] || { cat "$log" >&2; exit 1; }
+    "$hexray" render scenes/tncg15_room.json --backend cpu --time "$t" --seed 5 --variance \
+        --out out/methods/readme_default.exr 2> out/methods/readme_default.log
+    for which in path default; do
+        "$hexray" compare "out/methods/readme_$which.exr" "$refs/tncg15_room_256.exr" --json \
+            > "$out/readme_$which.json"
+        grep '^rendered' "out/methods/readme_$which.log" > "$out/readme_$which.txt"
+    done
+    cp out/methods/readme_default.png docs/tncg15_room.png
+    cp out/methods/readme_path.png "$out/tncg15_room_512_path_64spp.png"
 }
 
 markdown() {
@@ -143,10 +163,10 @@ print(f"time after warm-up ({budget:.0f} s per curve), on the machine in each ch
 print("reference's own noise (mean var_r/(r² + 0.01), from its variance file) is subtracted in the")
 print("tables (E (x − r)² = var_x + var_r) and given with them. Mitsuba 3's `path` and `ptracer`")
 print("(`llvm_ad_rgb`, all cores) were measured in the same run, scene by scene, just before hexray's")
-print("curves, with `../shared/mitsuba/mitsuba_side.py curve`; not alternated with them. Its curves")
-print("double the samples per wave and stop at the last wave that fits the budget, so a Mitsuba row")
-print("gives its time: it is relMSE after that many seconds, not after the budget, and no ratio to it")
-print("is drawn here. For an equal-time ratio against Mitsuba, alternate the two in one run.\n")
+print("curves, with `benches/mitsuba_curve.py` (doubling waves, then one sized to end just past the")
+print("budget, so its row is interpolated at the budget like hexray's). Measured in the same run but")
+print("not alternated: no ratio to Mitsuba is drawn here; the closing notes of the issues give")
+print("alternated ones. A row marked with a time is the value of a curve that ended before the budget.\n")
 print("Light tracing (`light`) sees nothing through a mirror or glass, so its error has a floor")
 print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere; SPPM (`sppm`) and VCM (`vcm`)")
 print("merge photons and are consistent, not unbiased (their error includes the merging bias). The methods themselves:")
@@ -185,16 +205,54 @@ for name, scene, ref, size in scenes:
         print(f"| {b}{when} | {fmt(v)} | {fmt(c)} | {'–' if ratio is None else f'{ratio:.2f}'} |")
         summary.append((name, b, c, ratio))
     print()
-    pics = [m for m in ("path", "light", "bdpt") if os.path.exists(f"{out}/{name}/{m}.png")]
+    pics = [m for m in ("path", "light", "bdpt", "sppm", "vcm") if os.path.exists(f"{out}/{name}/{m}.png")]
     if pics:
         print("Pictures, 10 s each on the CPU backend: " + ", ".join(pics) + ".\n")
         print("| " + " | ".join(pics) + " |")
         print("| " + " | ".join("---" for _ in pics) + " |")
         print("| " + " | ".join(f"![{m}]({os.path.basename(out)}/{name}/{m}.png)" for m in pics) + " |\n")
+# The default method: per backend, the method with the lowest relMSE at the budget on the three
+# reference scenes (the geometric mean of its ratios to path breaks a split decision).
+refscenes = ("tncg15_room", "glass_room", "cornell_box")
+rows = [(n, b, c, r) for n, b, c, r in summary if n in refscenes and b.startswith("hexray")]
+if rows:
+    print("## The default method\n")
+    print("`hexray render`'s default is the method with the lowest error at equal time on the three")
+    print(f"reference scenes on each backend (relMSE at {budget:.0f} s minus the reference's noise, as")
+    print("above; ratio to the backend's path tracer, and its geometric mean over the scenes):\n")
+    backends = sorted({b.split()[1] for _, b, _, _ in rows})
+    methods = ["path", "light", "bdpt", "sppm", "vcm"]
+    print("| backend | method | " + " | ".join(refscenes) + " | geometric mean |")
+    print("| --- | --- | " + " | ".join("---" for _ in refscenes) + " | --- |")
+    for be in backends:
+        for m in methods:
+            rs = [next((r for n, b, c, r in rows if n == sc and b == f"hexray {be} {m}"), None) for sc in refscenes]
+            if all(r is None for r in rs):
+                continue
+            g = math.exp(sum(math.log(r) for r in rs) / len(rs)) if all(r for r in rs) else None
+            cells = ["–" if r is None else f"{r:.2f}" for r in rs]
+            print(f"| {be} | {m} | " + " | ".join(cells) + f" | {'–' if g is None else f'{g:.2f}'} |")
+    print()
+if os.path.exists(f"{out}/readme_default.json"):
+    print("## The README's picture\n")
+    print("`hexray render` with its defaults (tncg15_room, 512x512, CPU), the old default (path, 64 spp)")
+    print("against the default method for as long, both compared with the 256x256 reference as 2x2")
+    print("block means (`docs/methods.sh readme`):\n")
+    print("| render | relMSE | minus the reference's noise |")
+    print("| --- | --- | --- |")
+    vals = {}
+    for which in ("path", "default"):
+        c = json.load(open(f"{out}/readme_{which}.json"))
+        line = open(f"{out}/readme_{which}.txt").read().strip()
+        n = c.get("relmse_reference_noise") or 0.0
+        vals[which] = c["relmse"] - n
+        print(f"| {line} | {c['relmse']:.2e} | {c['relmse'] - n:.2e} |")
+    print(f"\nRatio default / old default: {vals['default'] / vals['path']:.3f}.\n")
+    print(f"![the default render]({'tncg15_room.png'}) ![path, 64 spp]({os.path.basename(out)}/tncg15_room_512_path_64spp.png)\n")
 if os.path.exists(f"{out}/bench.txt"):
     print("## Cost\n")
-    print("`hexray bench --method path,light,bdpt --spp 32` (256x256; a BDPT or light-tracing")
-    print("\"camera path\" is one pixel's iteration, its light subpath included; rays per path are")
+    print("`hexray bench --method path,light,bdpt,sppm,vcm --spp 32` (256x256; for every method but")
+    print("path a \"camera path\" is one pixel's iteration, its light subpath included; rays per path are")
     print("counted on the CPU):\n")
     print("```")
     print(open(f"{out}/bench.txt").read().rstrip())
@@ -207,6 +265,7 @@ PY
 case "${1:-}" in
     references) references ;;
     run) run ;;
+    readme) readme; markdown ;;
     markdown) markdown ;;
     *) sed -n '2,16p' "$0"; exit 2 ;;
 esac

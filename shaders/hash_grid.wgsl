@@ -169,3 +169,35 @@ fn grid_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
         grid_entries[j] = e;
     }
 }
+
+// For tests (`GpuRenderer::grid_check`): per query point i (camera_radiance[i].xyz, i <
+// frame.path_count), what merging's search (query_buckets, then the distance test) finds: the
+// number of vertices within r, the sum of their indices mod 2^20 and an xor of their hashed
+// indices in 23 bits, each an integer below 2^24 so that f32 holds it exactly.
+@compute @workgroup_size(64, 1, 1)
+fn grid_query_check(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = frame.path_origin + gid.x;
+    if i >= frame.path_count {
+        return;
+    }
+    let p = camera_radiance[i].xyz;
+    var count = 0u;
+    var sum = 0u;
+    var mix = 0u;
+    let q = query_buckets(p);
+    for (var j = 0u; j < q.n; j++) {
+        let b = q.b[j];
+        let end = atomicLoad(&grid_starts[b + 1u]);
+        for (var e = atomicLoad(&grid_starts[b]); e < end; e++) {
+            let entry = grid_entries[e];
+            let d = entry.xyz - p;
+            if dot(d, d) < grid_params.radius2 {
+                let index = bitcast<u32>(entry.w);
+                count += 1u;
+                sum += index;
+                mix ^= index * 2654435761u;
+            }
+        }
+    }
+    camera_radiance[i] = vec4<f32>(f32(count), f32(sum & 0xfffffu), f32(mix >> 9u), 0.0);
+}

@@ -69,6 +69,47 @@ pub fn read_image(path: &Path) -> Result<RgbImage> {
     }
 }
 
+/// The factor k when `candidate` is k times `reference` in both dimensions (k >= 2), so that
+/// each k x k block of candidate pixels covers one reference pixel.
+pub fn block_factor(candidate: &RgbImage, reference: &RgbImage) -> Option<usize> {
+    let (w, h) = (reference.width, reference.height);
+    let k = candidate.width.checked_div(w)?;
+    (k >= 2 && candidate.width == k * w && candidate.height == k * h).then_some(k)
+}
+
+/// Each k x k block's mean: with box-filtered pixels (hexray's, Mitsuba's `box`), the mean of a
+/// pixel's k x k sub-pixels is that pixel's value, so a render at k times the reference's size
+/// compares with it after this. Applied to a variance of the mean, `variance` divides by k²
+/// once more (the mean of k² independent estimates).
+pub fn block_mean(image: &RgbImage, k: usize, variance: bool) -> RgbImage {
+    let (w, h) = (image.width / k, image.height / k);
+    let scale = if variance {
+        1.0 / (k * k * k * k) as f64
+    } else {
+        1.0 / (k * k) as f64
+    };
+    let mut pixels = vec![[0.0f32; 3]; w * h];
+    for (y, row) in pixels.chunks_mut(w).enumerate() {
+        for (x, out) in row.iter_mut().enumerate() {
+            let mut sum = [0.0f64; 3];
+            for dy in 0..k {
+                for dx in 0..k {
+                    let p = image.pixels[(y * k + dy) * image.width + x * k + dx];
+                    for c in 0..3 {
+                        sum[c] += p[c] as f64;
+                    }
+                }
+            }
+            *out = sum.map(|s| (s * scale) as f32);
+        }
+    }
+    RgbImage {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
 /// The error metrics of a candidate against a reference, computed in f64.
 pub fn compare(
     candidate: &RgbImage,

@@ -93,9 +93,10 @@ struct RenderArgs {
     /// stay black); `light`, `bdpt`, `sppm` and `vcm` take one iteration (a light subpath and a
     /// camera subpath per pixel) per sample. `sppm` and `vcm` merge photons: consistent, not
     /// unbiased (the bias shrinks with the radius over iterations; the standard error does not
-    /// cover it).
-    #[arg(long, value_enum, default_value_t = Method::Path)]
-    method: Method,
+    /// cover it). Default: vcm for `render` (the lowest error at equal time on the reference
+    /// scenes, docs/methods.md), path for `reference` (unbiased).
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.003 x the scene's
     /// bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm with 0 is
     /// bdpt.
@@ -108,8 +109,8 @@ struct RenderArgs {
     /// (path tracing only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
     light_samples: u32,
-    /// Samples per pixel (iterations for light and bdpt). Without --time the default is 64;
-    /// with --time, no sample limit.
+    /// Samples per pixel (iterations for all methods but path). Without --time the default is
+    /// 64 for path and 16 for the others (about as long); with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     spp: Option<u32>,
     /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
@@ -178,13 +179,25 @@ fn compare(args: &CompareArgs) -> ExitCode {
         .ref_var
         .clone()
         .or_else(|| variance_beside(&args.reference));
+    let mut notes = Vec::new();
     let result = (|| -> Result<_> {
-        let c = read(&args.candidate)?;
+        let mut c = read(&args.candidate)?;
         let r = read(&args.reference)?;
-        let vars = match (&var, &ref_var) {
+        let mut vars = match (&var, &ref_var) {
             (Some(a), Some(b)) => Some((read(a)?, read(b)?)),
             _ => None,
         };
+        // A render at k times the reference's size: each k x k block is one reference pixel.
+        if let Some(k) = hexray::compare::block_factor(&c, &r) {
+            c = hexray::compare::block_mean(&c, k, false);
+            if let Some((vc, _)) = vars.as_mut() {
+                *vc = hexray::compare::block_mean(vc, k, true);
+            }
+            notes.push(format!(
+                "the candidate is {k}x the reference's size: compared as the means of its \
+                 {k}x{k} blocks"
+            ));
+        }
         hexray::compare::compare(&c, &r, vars.as_ref().map(|(a, b)| (a, b))).with_context(|| {
             format!(
                 "comparing {} with {}",
@@ -195,6 +208,7 @@ fn compare(args: &CompareArgs) -> ExitCode {
     })();
     match result {
         Ok(mut cmp) => {
+            cmp.notes.append(&mut notes);
             cmp.notes.extend(
                 [
                     ("candidate", &args.candidate),
@@ -683,6 +697,8 @@ fn main() -> ExitCode {
         Some(Command::Reference(mut r)) => {
             // A reference is a render with its variance, a long default and its own name.
             r.variance = true;
+            // A reference must be unbiased: path tracing unless asked otherwise.
+            r.method.get_or_insert(Method::Path);
             if r.spp.is_none() && r.time.is_none() {
                 r.spp = Some(1024);
             }
@@ -725,6 +741,7 @@ fn main() -> ExitCode {
 }
 
 fn render(args: &RenderArgs) -> Result<ExitCode> {
+    let method = args.method.unwrap_or(Method::DEFAULT);
     // Everything that can be wrong with the input is found here, before any output exists.
     let scene = match Scene::load(&args.scene) {
         Ok(s) => s,
@@ -733,34 +750,45 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
+    // The default output is named after the scene file (its stem: no folder in it), not the
+    // scene's `name`, so that a copied scene does not overwrite the original's render and no
+    // name can lead out of out/.
     let out = args.out.clone().unwrap_or_else(|| {
-        let name = if scene.desc.name.is_empty() {
-            args.scene
-                .file_stem()
-                .map_or("render".into(), |s| s.to_string_lossy().into_owned())
-        } else {
-            scene.desc.name.clone()
-        };
-        PathBuf::from("out").join(format!("{name}.exr"))
+        let stem = args
+            .scene
+            .file_stem()
+            .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(format!("{stem}.exr"))
     });
-    if out.extension().is_none_or(|e| e != "exr") {
+    if out
+        .extension()
+        .is_none_or(|e| !e.eq_ignore_ascii_case("exr"))
+    {
         eprintln!(
             "error: --out {}: the output must be an .exr path (the PNG is written beside it)",
             out.display()
         );
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
-    if args.light_samples > 1 && args.method != Method::Path {
+    if args.light_samples > 1 && method != Method::Path {
+        let given = if args.method.is_none() {
+            " (the default method; add --method path)"
+        } else {
+            ""
+        };
         eprintln!(
-            "error: --light-samples {} is for --method path; {} takes one light sample per vertex",
-            args.light_samples, args.method
+            "error: --light-samples {} is for --method path; {method}{given} takes one light \
+             sample per vertex",
+            args.light_samples
         );
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
     let budget = Budget {
-        spp: args
-            .spp
-            .or(if args.time.is_none() { Some(64) } else { None }),
+        spp: args.spp.or(if args.time.is_none() {
+            Some(method.default_samples())
+        } else {
+            None
+        }),
         seconds: args.time,
     };
     let threads = args.threads.map_or_else(
@@ -770,13 +798,18 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
     let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
-    let radius = match merge_radius_of(args.method, args.radius, args.alpha, &flat) {
+    let radius = match merge_radius_of(method, args.radius, args.alpha, &flat) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
+    // The last check before any work: the outputs can be written (not found after the render).
+    if let Err(e) = output::check_writable(&out, args.variance) {
+        eprintln!("error: --out {}: {e:#}", out.display());
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
     let gpu = match args.backend {
         BackendChoice::Cpu => None,
         BackendChoice::Gpu => match gpu::acquire(args.adapter.as_deref()) {
@@ -821,7 +854,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         None => {
             let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
             cpu.light_samples = args.light_samples;
-            cpu.method = args.method;
+            cpu.method = method;
             cpu.radius = Some(radius);
             Box::new(cpu)
         }
@@ -846,7 +879,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 hexray::cpu::Faults::NONE,
                 checks,
                 residency,
-                args.method,
+                method,
             )?;
             renderer.set_light_samples(args.light_samples);
             renderer.set_merge_radius(radius);
@@ -919,7 +952,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     meta.set("spp", report.spp);
     meta.set("seed", args.seed);
     meta.set("light_samples", args.light_samples);
-    meta.set("method", args.method);
+    meta.set("method", method);
     meta.set("backend", backend.name());
     meta.set("device", backend.device());
     meta.set("render_seconds", format!("{:.6}", report.seconds));
@@ -948,7 +981,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         eprintln!(
             "rendered {} spp with {} in {:.2} s ({:.3} M camera paths/s; {why}); dropped {} samples",
             report.spp,
-            args.method,
+            method,
             report.seconds,
             paths / report.seconds / 1e6,
             film.dropped()
@@ -957,11 +990,11 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
             mean[0], mean[1], mean[2], se[0], se[1], se[2]
         );
-        if args.method.merges() {
+        if method.merges() {
             eprintln!(
                 "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
                  (alpha {}) leaves a bias that the standard error does not cover",
-                args.method,
+                method,
                 radius.initial,
                 radius.at(report.spp.saturating_sub(1)),
                 radius.alpha
@@ -986,10 +1019,15 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     })
 }
 
+/// Lists the adapters. Written with `writeln!` and its errors ignored, so that a reader that
+/// stops early (`hexray info | grep -q ...`) ends the listing instead of a panic.
 fn info() -> ExitCode {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
     let list = gpu::context::adapters();
     if list.is_empty() {
-        println!(
+        let _ = writeln!(
+            out,
             "no GPU adapters found; for software Vulkan: {}",
             gpu::context::LAVAPIPE_HINT
         );
@@ -998,8 +1036,9 @@ fn info() -> ExitCode {
     for (i, a) in list.iter().enumerate() {
         let info = a.get_info();
         let l = a.limits();
-        println!("[{i}] {}", gpu::context::describe(&info));
-        println!(
+        let _ = writeln!(out, "[{i}] {}", gpu::context::describe(&info));
+        let _ = writeln!(
+            out,
             "    max storage buffers/stage {}, max storage binding {} MiB, max workgroup invocations {}, max workgroups/dim {}",
             l.max_storage_buffers_per_shader_stage,
             l.max_storage_buffer_binding_size >> 20,

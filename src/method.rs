@@ -26,6 +26,23 @@ pub enum Method {
 }
 
 impl Method {
+    /// `hexray render`'s method when none is given: the one with the lowest relMSE at equal
+    /// time on the three reference scenes on each backend (docs/methods.md, "The default
+    /// method"). Consistent, not unbiased: the summary line says so, and `hexray reference`
+    /// keeps path tracing.
+    pub const DEFAULT: Method = Method::Vcm;
+
+    /// Samples (iterations) when neither `--spp` nor `--time` is given: 64 of path tracing, 16
+    /// of the methods that trace a light subpath and a camera subpath per pixel and iteration,
+    /// which cost 3-5x a path-traced sample on the reference scenes (`hexray bench`), so that
+    /// the default render takes about as long whichever the method.
+    pub fn default_samples(self) -> u32 {
+        match self {
+            Method::Path => 64,
+            _ => 16,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Method::Path => "path",

@@ -43,10 +43,41 @@ pub fn output_paths(out: &Path) -> (PathBuf, PathBuf, PathBuf) {
         .unwrap_or_else(|| "render".into());
     let dir = out.parent().unwrap_or(Path::new(""));
     (
-        dir.join(format!("{stem}.exr")),
+        out.to_path_buf(),
         dir.join(format!("{stem}.png")),
         dir.join(format!("{stem}_var.exr")),
     )
+}
+
+/// Checks, before any rendering, that the outputs for `--out out` can be written: no output
+/// path is an existing directory, the folder exists or can be made, and a file can be created in
+/// it (so `/proc/x.exr`, a path under a regular file and a read-only folder are refused at
+/// once, not after the render). The probe file is removed again.
+pub fn check_writable(out: &Path, variance: bool) -> Result<()> {
+    let (exr, png, var) = output_paths(out);
+    let mut paths = vec![&exr, &png];
+    if variance {
+        paths.push(&var);
+    }
+    for p in paths {
+        if p.is_dir() {
+            bail!("{} is a directory; give --out a file name", p.display());
+        }
+    }
+    let dir = exr.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Some(d) = dir {
+        std::fs::create_dir_all(d)
+            .with_context(|| format!("cannot create the output folder {}", d.display()))?;
+    }
+    let dir = dir.unwrap_or(Path::new("."));
+    let probe = dir.join(format!(".hexray-probe{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .with_context(|| format!("cannot write in the output folder {}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// Writes `bytes_of(tmp)` with `write` and renames it over `path`.

@@ -268,3 +268,65 @@ fn auto_backend_prefers_the_cpu_backend_over_a_software_adapter() {
     let (_, meta) = read_exr(&exr).unwrap();
     assert_eq!(meta.get("backend"), Some("cpu"));
 }
+
+fn render_to(out: &std::path::Path) -> std::process::Output {
+    hexray()
+        .args(["render", "scenes/tncg15_room.json", "--spp", "4"])
+        .args(["--width", "8", "--height", "8", "-q", "--out"])
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+/// An output that cannot be written is refused before any rendering, with exit 2 and the path
+/// in the message: a file in /proc, a path under a regular file, an existing directory.
+#[cfg(unix)]
+#[test]
+fn an_unwritable_output_is_refused_before_rendering() {
+    let dir = temp_dir("unwritable");
+    let file = dir.join("plain");
+    std::fs::write(&file, b"x").unwrap();
+    let folder = dir.join("folder.exr");
+    std::fs::create_dir_all(&folder).unwrap();
+    for out in [PathBuf::from("/proc/x.exr"), file.join("x.exr"), folder] {
+        let o = render_to(&out);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{}: {stderr}", out.display());
+        assert!(stderr.contains(&*out.to_string_lossy()), "{stderr}");
+    }
+}
+
+/// `.exr` is accepted in any letter case, and the EXR keeps the name given.
+#[test]
+fn an_output_named_in_capitals_is_written_as_named() {
+    let dir = temp_dir("capitals");
+    let out = dir.join("ROOM.EXR");
+    let o = render_to(&out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.exists() && dir.join("ROOM.png").exists());
+}
+
+/// The default output is named after the scene file, so a copied scene does not overwrite the
+/// original's render, and a scene `name` of "../../x" cannot write outside out/.
+#[test]
+fn the_default_output_is_named_after_the_scene_file() {
+    let dir = temp_dir("stem");
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(repo("scenes/tncg15_room.json")).unwrap())
+            .unwrap();
+    let escape = format!("hexray-escape-{}", std::process::id());
+    scene["name"] = serde_json::json!(format!("../../{escape}"));
+    let copy = dir.join("copy.json");
+    std::fs::write(&copy, scene.to_string()).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+        .current_dir(&dir)
+        .arg("render")
+        .arg(&copy)
+        .args(["--spp", "1", "--width", "8", "--height", "8", "-q"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("out/copy.exr").exists());
+    let outside = dir.join("out").join(format!("../../{escape}.exr"));
+    assert!(!outside.exists(), "wrote {}", outside.display());
+}

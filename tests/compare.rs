@@ -136,3 +136,50 @@ fn images_of_different_sizes_are_a_clear_error() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Each reference pixel repeated 2x2: every block's mean is the reference pixel.
+fn upsampled(img: &RgbImage, k: usize) -> RgbImage {
+    RgbImage {
+        width: img.width * k,
+        height: img.height * k,
+        pixels: (0..img.width * img.height * k * k)
+            .map(|i| {
+                let (x, y) = (i % (img.width * k), i / (img.width * k));
+                img.pixels[(y / k) * img.width + x / k]
+            })
+            .collect(),
+    }
+}
+
+/// A render at twice the reference's size is compared as its 2x2 block means (a box-filtered
+/// pixel is the mean of its sub-pixels): the reference repeated 2x2 has zero error, and one
+/// sub-pixel raised by 4 moves its block's mean by exactly 1.
+#[test]
+fn a_render_at_twice_the_size_compares_as_its_block_means() {
+    let dir = temp_dir("blocks");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let reference = image(8, 6);
+    let mut big = upsampled(&reference, 2);
+    write_exr(&b, &reference, &Metadata::default()).unwrap();
+    let run = |a: &Path, big: &RgbImage| {
+        write_exr(a, big, &Metadata::default()).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+            .current_dir(repo("."))
+            .args(["compare", "--json"])
+            .arg(a)
+            .arg(&b)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+    };
+    let same = run(&a, &big);
+    assert_eq!(same["rmse"].as_f64(), Some(0.0), "{same}");
+    assert_eq!(same["width"].as_u64(), Some(8));
+    big.pixels[0][0] += 4.0;
+    let raised = run(&a, &big);
+    let expected = (1.0f64 / (3.0 * 48.0)).sqrt();
+    let rmse = raised["rmse"].as_f64().unwrap();
+    assert!((rmse - expected).abs() < 1e-6 * expected, "{raised}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

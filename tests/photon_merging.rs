@@ -62,6 +62,63 @@ fn the_hash_grid_finds_exactly_the_vertices_within_the_radius() {
     );
 }
 
+/// The GPU's grid, built by its dispatches (count, scan, scatter, sort) over the same random
+/// points, is the CPU's entry for entry (same buckets, same order), and the GPU's own search
+/// (`grid_query_check`: the merge's `query_buckets` and distance test) finds for every query
+/// exactly the vertices brute force finds: their number, the sum of their indices and a hash of
+/// them. 20000 points, 4096 queries, three radii; a renderer of tncg15_room (whose bounding box
+/// corner is the grid's origin) at 64x64 holds them.
+#[test]
+fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
+    let Some(gpu) = gpu() else {
+        return;
+    };
+    let (scene, flat) = load("scenes/tncg15_room.json");
+    let camera = hexray::camera::Camera::new(&scene.desc.camera, 64, 64);
+    let mut renderer = hexray::gpu::GpuRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        &flat,
+        camera,
+        1,
+        Faults::NONE,
+        hexray::gpu::Checks::Unchecked,
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+        Method::Sppm,
+    )
+    .unwrap();
+    let vertices = points(20_000, 1);
+    let queries = points(4096, 2);
+    let min = hexray::merging::scene_bounds(&flat).0;
+    let mut total = 0;
+    for r in [0.02f32, 0.1, 0.4] {
+        let (grid, found) = renderer.grid_check(&vertices, &queries, r).unwrap();
+        let cpu = HashGrid::build(vertices.iter().copied(), min, r);
+        assert_eq!(grid.params, cpu.params, "r = {r}");
+        assert_eq!(grid.starts, cpu.starts, "r = {r}");
+        let bits = |e: &Vec<[f32; 4]>| -> Vec<[u32; 4]> {
+            e.iter().map(|v| v.map(f32::to_bits)).collect()
+        };
+        assert_eq!(bits(&grid.entries), bits(&cpu.entries), "r = {r}");
+        for (q, got) in queries.iter().zip(&found) {
+            let brute: Vec<u32> = (0..vertices.len() as u32)
+                .filter(|&i| (vertices[i as usize] - *q).length_squared() < r * r)
+                .collect();
+            let sum = brute.iter().fold(0u32, |a, &i| a.wrapping_add(i));
+            let mix = brute
+                .iter()
+                .fold(0u32, |a, &i| a ^ i.wrapping_mul(2_654_435_761));
+            let expected = [brute.len() as u32, sum & 0xf_ffff, mix >> 9];
+            assert_eq!(*got, expected, "query {q} at r = {r}");
+            total += brute.len();
+        }
+    }
+    assert!(
+        total > 10_000,
+        "the queries found too few vertices ({total})"
+    );
+}
+
 /// The check has power: a grid that looks only in the query's own cell misses vertices across
 /// its faces.
 #[test]
@@ -124,41 +181,56 @@ fn relmse(film: &Film, reference: &MeanImage) -> f64 {
 
 const CAUSTIC: &str = "scenes/stability/caustic.json";
 const CAUSTIC_REFERENCE: &str = "tests/data/references/stability/caustic_32.exr";
+const GLASS: &str = "scenes/glass_room.json";
+const GLASS_REFERENCE: &str = "tests/data/references/stability/glass_room_32.exr";
 
-/// The caustic scene (a glass sphere focusing a small light onto the floor): relMSE against
-/// the long path-traced reference falls with the iterations, at 4x the iterations to at most
-/// half (variance falls as n^−α, about 0.35x, and the bias as the radius², faster). Measured
-/// with the default radius schedule on 32x32: sppm 0.80 → 0.24 → 0.094 and vcm 2.5e-2 →
-/// 3.6e-3 → 1.1e-3 at 64, 256, 1024 iterations. VCM starts at 256: below that its error is
-/// a few rare bright merges (heavy-tailed), and one seed's 128 → 512 fell only to 0.50x. Also the image mean after 4n iterations is
-/// within 4 combined standard errors of the reference's: its bias has fallen below the noise.
-fn converges(method: Method, n: u32) {
-    let (_, flat) = load(CAUSTIC);
+/// Convergence against a long path-traced reference (32x32, 65536 spp): relMSE falls with the
+/// iterations, at 4x the iterations to at most half (variance falls as n^−α, about 0.35x, and
+/// the bias as the radius², faster), and the image mean after 4n iterations is within 4
+/// combined standard errors of the reference's: its bias has fallen below the noise.
+fn converges(scene: &str, reference: &str, method: Method, n: u32) {
+    let (_, flat) = load(scene);
     let radius = MergeRadius::default_for(&flat);
-    let reference = reference::read(CAUSTIC_REFERENCE);
-    let short = render_cpu_merging(CAUSTIC, 32, 32, n, 11, method, radius, Faults::NONE);
-    let long = render_cpu_merging(CAUSTIC, 32, 32, 4 * n, 12, method, radius, Faults::NONE);
-    let (e_short, e_long) = (relmse(&short, &reference), relmse(&long, &reference));
+    let truth = reference::read(reference);
+    let short = render_cpu_merging(scene, 32, 32, n, 11, method, radius, Faults::NONE);
+    let long = render_cpu_merging(scene, 32, 32, 4 * n, 12, method, radius, Faults::NONE);
+    let (e_short, e_long) = (relmse(&short, &truth), relmse(&long, &truth));
     eprintln!(
-        "{method}: relMSE {e_short:.3e} at {n} iterations, {e_long:.3e} at {}",
+        "{method} {scene}: relMSE {e_short:.3e} at {n} iterations, {e_long:.3e} at {}",
         4 * n
     );
     assert!(
         e_long <= 0.5 * e_short,
-        "{method}: relMSE {e_short:e} -> {e_long:e} at 4x the iterations"
+        "{method} {scene}: relMSE {e_short:e} -> {e_long:e} at 4x the iterations"
     );
-    let z = reference::film_mean_z(&format!("{method} at {}", 4 * n), &long, CAUSTIC_REFERENCE);
-    assert!(reference::means_agree(z), "{method}: z {z:?}");
+    let z = reference::film_mean_z(&format!("{method} at {}", 4 * n), &long, reference);
+    assert!(reference::means_agree(z), "{method} {scene}: z {z:?}");
 }
 
+/// The caustic scene (a glass sphere focusing a small light onto the floor). Measured with the
+/// default radius schedule on 32x32: sppm 0.80 → 0.24 → 0.094 and vcm 2.5e-2 → 3.6e-3 → 1.1e-3
+/// at 64, 256, 1024 iterations. VCM starts at 256: below that its error is a few rare bright
+/// merges (heavy-tailed), and one seed's 128 → 512 fell only to 0.50x.
 #[test]
 fn sppm_converges_on_the_caustic() {
-    converges(Method::Sppm, 128);
+    converges(CAUSTIC, CAUSTIC_REFERENCE, Method::Sppm, 128);
 }
 
 #[test]
 fn vcm_converges_on_the_caustic() {
-    converges(Method::Vcm, 256);
+    converges(CAUSTIC, CAUSTIC_REFERENCE, Method::Vcm, 256);
+}
+
+/// glass_room (glass spheres over a diffuse floor under a small light). Measured on 32x32:
+/// sppm 0.81 → 0.33 at 128 → 512 iterations, vcm 3.3e-3 → 8.3e-4.
+#[test]
+fn sppm_converges_on_glass_room() {
+    converges(GLASS, GLASS_REFERENCE, Method::Sppm, 128);
+}
+
+#[test]
+fn vcm_converges_on_glass_room() {
+    converges(GLASS, GLASS_REFERENCE, Method::Vcm, 128);
 }
 
 /// The convergence check has power: merges counted with the 3-D ball's kernel (1 / (4/3 π r³)

@@ -47,7 +47,9 @@ const FIRST_VERTICES_PER_PATH: f64 = 8.0;
 /// The light-vertex pool and the hash grid over it, which grow together.
 struct Pool {
     bind_group: wgpu::BindGroup,
+    vertices: wgpu::Buffer,
     grid_params: wgpu::Buffer,
+    grid_entries: wgpu::Buffer,
     grid_starts: wgpu::Buffer,
     grid_cursor: wgpu::Buffer,
 }
@@ -59,6 +61,8 @@ struct Merging {
     scan: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
+    /// The tests' search (`grid_query_check`).
+    query_check: wgpu::ComputePipeline,
     radius: MergeRadius,
     /// The grid's origin (`merging::scene_bounds`), as on the CPU.
     grid_min: glam::Vec3,
@@ -154,7 +158,9 @@ impl Pool {
         });
         Pool {
             bind_group,
+            vertices,
             grid_params,
+            grid_entries,
             grid_starts,
             grid_cursor,
         }
@@ -217,7 +223,10 @@ impl Bidirectional {
         let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera radiance"),
             contents: bytemuck::cast_slice(&n_c),
-            usage: wgpu::BufferUsages::STORAGE,
+            // Copies for the tests' grid check (`GpuRenderer::grid_check`).
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         });
         let tally_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tally readback"),
@@ -248,6 +257,7 @@ impl Bidirectional {
             scan: pipeline("grid_scan"),
             scatter: pipeline("grid_scatter"),
             sort: pipeline("grid_sort"),
+            query_check: pipeline("grid_query_check"),
             radius: MergeRadius::default_for(scene),
             grid_min: crate::merging::scene_bounds(scene).0,
             ball_kernel,
@@ -376,6 +386,94 @@ impl GpuRenderer {
         self.queue.submit([encoder.finish()]);
         self.item_dispatches(&m.scatter, frame, b.capacity);
         self.item_dispatches(&m.sort, frame, buckets);
+    }
+
+    /// For tests: the hash grid the GPU builds over `points` (stored as the light vertices of
+    /// subpaths 0.., one each) with cells for `radius`, read back, and for each query point
+    /// what merging's search finds (`grid_query_check`): (count, sum of indices mod 2^20, xor
+    /// of hashed indices >> 9). Needs a merging method, at most the pool's capacity of points
+    /// and at most the image's pixels of queries.
+    pub fn grid_check(
+        &mut self,
+        points: &[glam::Vec3],
+        queries: &[glam::Vec3],
+        radius: f32,
+    ) -> Result<(crate::hash_grid::HashGrid, Vec<[u32; 3]>)> {
+        let pixels = self.frame.camera.width as u64 * self.frame.camera.height as u64;
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        let Some(m) = b.merging.as_ref() else {
+            bail!("the grid check needs a merging method");
+        };
+        if points.len() > b.capacity as usize || queries.len() as u64 > pixels {
+            bail!("too many points or queries for the pool and the image");
+        }
+        let vertices: Vec<LightVertex> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| LightVertex {
+                p: p.to_array(),
+                length: 1,
+                path: i as u32,
+                ..Default::default()
+            })
+            .collect();
+        let q: Vec<[f32; 4]> = queries.iter().map(|p| p.extend(0.0).to_array()).collect();
+        self.queue
+            .write_buffer(&b.pool.vertices, 0, bytemuck::cast_slice(&vertices));
+        self.queue.write_buffer(
+            &b.tallies,
+            4 * vertex_counter_word(pixels),
+            bytemuck::bytes_of(&(points.len() as u32)),
+        );
+        self.queue
+            .write_buffer(&b.camera_radiance, 0, bytemuck::cast_slice(&q));
+        let frame = Frame {
+            vertex_capacity: b.capacity,
+            path_count: queries.len() as u32,
+            ..self.frame
+        };
+        self.build_grid(&frame, radius);
+        self.item_dispatches(&m.query_check, &frame, queries.len() as u32);
+        // Storage buffers are not mappable: copy the first `size` bytes out through a staging
+        // buffer.
+        let read = |buffer: &wgpu::Buffer, size: u64| -> Result<Vec<u8>> {
+            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("grid check readback"),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, Some(size));
+            self.queue.submit([encoder.finish()]);
+            let mut bytes = self.read_buffer(&staging)?;
+            bytes.truncate(size as usize);
+            Ok(bytes)
+        };
+        let params: crate::hash_grid::GridParams = bytemuck::pod_read_unaligned(&read(
+            &b.pool.grid_params,
+            std::mem::size_of::<crate::hash_grid::GridParams>() as u64,
+        )?);
+        let starts: Vec<u32> = bytemuck::cast_slice(&read(
+            &b.pool.grid_starts,
+            4 * (params.buckets() as u64 + 1),
+        )?)
+        .to_vec();
+        let entries: Vec<[f32; 4]> =
+            bytemuck::cast_slice(&read(&b.pool.grid_entries, 16 * points.len() as u64)?).to_vec();
+        let found: Vec<[u32; 3]> = bytemuck::cast_slice::<u8, [f32; 4]>(&read(
+            &b.camera_radiance,
+            16 * queries.len() as u64,
+        )?)
+        .iter()
+        .map(|v| [v[0] as u32, v[1] as u32, v[2] as u32])
+        .collect();
+        let grid = crate::hash_grid::HashGrid {
+            params,
+            starts,
+            entries,
+        };
+        Ok((grid, found))
     }
 
     /// Runs the light pass over subpaths `origin..origin + count`, in dispatches of about
