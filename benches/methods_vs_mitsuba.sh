@@ -43,7 +43,8 @@ for name in "${scenes[@]}"; do
     spp=$(python3 -c "print(max(1, round($rate * $seconds)))")
     echo "== $name: Mitsuba path at $spp spp (about $seconds s), reference noise $noise" >&2
     for round in $(seq 1 "$rounds"); do
-        row=$("$python" benches/mitsuba_curve.py "$scene" --ref "$ref" --spp "$spp" | tail -1)
+        row=$("$python" benches/mitsuba_curve.py "$scene" --ref "$ref" --spp "$spp" \
+            --seed "$((2000 + 100 * round))" | tail -1)
         t=$(echo "$row" | cut -d, -f4)
         e=$(echo "$row" | awk -F, -v n="$noise" '{print $6 - n}')
         echo "$name,$round,mitsuba,path,$t,$e" | tee -a "$work/rows.csv" >&2

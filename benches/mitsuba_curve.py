@@ -1,7 +1,7 @@
 """Mitsuba 3's relMSE against render time on a hexray scene, up to the budget and not short of it.
 
     python benches/mitsuba_curve.py SCENE.json --ref REF.exr|REF.npy [--res 256] [--seconds 30]
-                                    [--integrator path|ptracer] [--spp N]
+                                    [--integrator path|ptracer] [--spp N] [--seed S]
 
 CSV on stdout, `docs/methods.sh`'s overlay format (scene,variant,spp,seconds,rmse,relmse; the
 variant column is the integrator). Each point is a fresh render with its own seed, timed around
@@ -63,6 +63,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--integrator", default="path")
     ap.add_argument("--spp", type=int)
+    ap.add_argument("--seed", type=int, default=2000, help="point k renders with seed SEED + spp")
     a = ap.parse_args()
 
     desc = load_scene(a.scene, res=a.res, spp=1)
@@ -74,7 +75,7 @@ def main():
 
     def point(spp, show=True):
         start = time.perf_counter()
-        x = np.array(mi.render(scene, spp=spp, seed=2000 + spp), dtype=np.float64)[..., :3]
+        x = np.array(mi.render(scene, spp=spp, seed=a.seed + spp), dtype=np.float64)[..., :3]
         seconds = time.perf_counter() - start
         e = (x - reference) ** 2
         if show:

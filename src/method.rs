@@ -32,14 +32,16 @@ impl Method {
     /// keeps path tracing.
     pub const DEFAULT: Method = Method::Vcm;
 
-    /// Samples (iterations) when neither `--spp` nor `--time` is given: 64 of path tracing, 16
+    /// Samples (iterations) when neither `--spp` nor `--time` is given: 64 of path tracing, 8
     /// of the methods that trace a light subpath and a camera subpath per pixel and iteration,
-    /// which cost 3-5x a path-traced sample on the reference scenes (`hexray bench`), so that
-    /// the default render takes about as long whichever the method.
+    /// which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost more as the
+    /// image grows, since every pixel adds a photon), so that the default render (tncg15_room,
+    /// 512x512) takes about as long as before: measured 11.0 s for 64 spp of path tracing and
+    /// 11.9 s for 8 iterations of vcm on 2 cores (docs/methods.md).
     pub fn default_samples(self) -> u32 {
         match self {
             Method::Path => 64,
-            _ => 16,
+            _ => 8,
         }
     }
 

@@ -248,10 +248,10 @@ fn emitter_sampling_p(p: Vec3, claimed_pmf: &dyn Fn(usize) -> f32) -> f64 {
 fn emitter_sampling_p_in(scene: &FlatScene, p: Vec3, claimed_pmf: &dyn Fn(usize) -> f32) -> f64 {
     let observed = histogram(|i| {
         let u = Sampler::new(9, i, 0).draw4(1);
-        let ls = sample_emitter(&scene, u[0], u[1], u[2]);
+        let ls = sample_emitter(scene, u[0], u[1], u[2]);
         Some(ls.p - p)
     });
-    let expected = expected_counts(&emitter_pdf(&scene, p, claimed_pmf), SAMPLES as f64);
+    let expected = expected_counts(&emitter_pdf(scene, p, claimed_pmf), SAMPLES as f64);
     chi_square_p(&observed, &expected, "emitter sampling")
 }
 
