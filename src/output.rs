@@ -145,6 +145,9 @@ pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {
             .iter()
             .map(|(k, v)| format!("{k}={}\n", v.replace('\n', " ")))
             .collect();
+        // EXR text is Latin-1: anything beyond U+00FF (a scene path in Japanese) is escaped,
+        // never a panic after the render.
+        let lines = latin1_escape(&lines);
         attrs.other.insert(
             Text::from(METADATA_ATTRIBUTE),
             exr::meta::attribute::AttributeValue::Text(Text::from(lines.as_str())),
@@ -155,6 +158,54 @@ pub fn write_exr(path: &Path, image: &RgbImage, meta: &Metadata) -> Result<()> {
             .to_file(tmp)
             .with_context(|| format!("writing {}", tmp.display()))
     })
+}
+
+/// `s` in characters an EXR text attribute holds (Latin-1): `\` becomes `\\`, and each
+/// character above U+00FF `\u{XXXX}` (its code point in hex); [`latin1_unescape`] undoes it.
+pub fn latin1_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) <= 0xff => out.push(c),
+            c => out.push_str(&format!("\\u{{{:x}}}", c as u32)),
+        }
+    }
+    out
+}
+
+/// The inverse of [`latin1_escape`]; anything that is not one of its escapes stays as it is.
+pub fn latin1_unescape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find('\\') {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        if let Some(after) = tail.strip_prefix("\\\\") {
+            out.push('\\');
+            rest = after;
+            continue;
+        }
+        let code = tail
+            .strip_prefix("\\u{")
+            .and_then(|t| t.split_once('}'))
+            .and_then(|(hex, after)| {
+                let c = char::from_u32(u32::from_str_radix(hex, 16).ok()?)?;
+                Some((c, after))
+            });
+        match code {
+            Some((c, after)) => {
+                out.push(c);
+                rest = after;
+            }
+            None => {
+                out.push('\\');
+                rest = &tail[1..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// Reads the first RGB(A) layer of an EXR and its `hexray:` metadata.
@@ -177,7 +228,7 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
         if let (METADATA_ATTRIBUTE, exr::meta::attribute::AttributeValue::Text(t)) =
             (k.to_string().as_str(), v)
         {
-            for line in t.to_string().lines() {
+            for line in latin1_unescape(&t.to_string()).lines() {
                 if let Some((key, value)) = line.split_once('=') {
                     meta.set(key, value);
                 }
@@ -285,6 +336,21 @@ mod tests {
             .collect();
         assert!(leftovers.is_empty());
         std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn latin1_escapes_round_trip() {
+        for s in [
+            "plain",
+            "ümlaut ÿ",
+            "場景/部屋.json",
+            "back\\slash \\u{41}",
+            "emoji 🦀\\",
+        ] {
+            let e = latin1_escape(s);
+            assert!(e.chars().all(|c| (c as u32) <= 0xff), "{e}");
+            assert_eq!(latin1_unescape(&e), s);
+        }
     }
 
     #[test]

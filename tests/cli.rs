@@ -330,3 +330,24 @@ fn the_default_output_is_named_after_the_scene_file() {
     let outside = dir.join("out").join(format!("../../{escape}.exr"));
     assert!(!outside.exists(), "wrote {}", outside.display());
 }
+
+/// A scene path beyond Latin-1 (EXR text attributes are Latin-1) renders and records the path:
+/// escaped in the file, read back as it was, never a panic after the render.
+#[test]
+fn a_scene_path_beyond_latin_1_is_recorded_in_the_exr() {
+    let dir = temp_dir("unicode").join("場景");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("部屋.json");
+    std::fs::copy(repo("scenes/tncg15_room.json"), &scene).unwrap();
+    let out = dir.join("r.exr");
+    let o = hexray()
+        .arg("render")
+        .arg(&scene)
+        .args(["--spp", "1", "--width", "8", "--height", "8", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, meta) = read_exr(&out).unwrap();
+    assert_eq!(meta.get("scene"), Some(&*scene.to_string_lossy()));
+}
