@@ -217,9 +217,15 @@ fn sphere_normal(sphere: Sphere, d: vec3<f32>) -> vec3<f32> {
 fn sphere_point(ray: Ray, sphere: Sphere, t: f32) -> SurfaceHit {
     var local = ray.o - sphere.center + t * ray.d;
     local = local * (sphere.radius / length(local));
+    let pe = sphere_point_at(sphere, local);
+    return SurfaceHit(t, pe.p, pe.p_err, sphere_normal(sphere, local / sphere.radius), sphere.material, 0u);
+}
+
+// The point at offset `local` from a sphere's centre and its error bound (`sphere_point_at`),
+// shared by hits and sampled emitter points.
+fn sphere_point_at(sphere: Sphere, local: vec3<f32>) -> PointWithError {
     let p = sphere.center + local;
-    let p_err = gamma(5.0) * abs(local) + gamma(2.0) * abs(p);
-    return SurfaceHit(t, p, p_err, sphere_normal(sphere, local / sphere.radius), sphere.material, 0u);
+    return PointWithError(p, gamma(5.0) * abs(local) + gamma(2.0) * abs(p));
 }
 
 // The slab test against the four children's boxes of a node at once, with pbrt-v4's

@@ -32,10 +32,8 @@ fn sample_emitter(u_select: f32, u1: f32, u2: f32) -> LightSample {
     if (row.prim & PRIM_SPHERE_BIT) != 0u {
         let sphere = spheres[row.prim & ~PRIM_SPHERE_BIT];
         let d = sample_uniform_sphere(u1, u2);
-        let local = sphere.radius * d;
-        let p = sphere.center + local;
-        let p_err = gamma(5.0) * abs(local) + gamma(2.0) * abs(p);
-        return LightSample(p, p_err, sphere_normal(sphere, d), materials[sphere.material].emission, pdf_area);
+        let pe = sphere_point_at(sphere, sphere.radius * d);
+        return LightSample(pe.p, pe.p_err, sphere_normal(sphere, d), materials[sphere.material].emission, pdf_area);
     }
     let tri = triangles[row.prim];
     let b = sample_uniform_triangle(u1, u2);

@@ -407,12 +407,19 @@ pub fn triangle_normal(tri: &Triangle) -> Vec3 {
 /// rounding of adding the centre back.
 #[inline]
 pub fn sphere_point(ray: &Ray, sphere: &Sphere, t: f32) -> (Vec3, Vec3, Vec3) {
-    let center = Vec3::from(sphere.center);
-    let local = ray.o - center + t * ray.d;
+    let local = ray.o - Vec3::from(sphere.center) + t * ray.d;
     let local = local * (sphere.radius / local.length());
-    let p = center + local;
-    let p_err = gamma(5) * local.abs() + gamma(2) * p.abs();
+    let (p, p_err) = sphere_point_at(sphere, local);
     (p, p_err, sphere.normal(local / sphere.radius))
+}
+
+/// The point at offset `local` (of length r, up to rounding) from a sphere's centre, and its
+/// error bound: gamma(5)|local| for the offset's rounding, plus the rounding of adding the
+/// centre. Shared by hits (`sphere_point`) and sampled emitter points (`light::sample_emitter`).
+#[inline]
+pub fn sphere_point_at(sphere: &Sphere, local: Vec3) -> (Vec3, Vec3) {
+    let p = Vec3::from(sphere.center) + local;
+    (p, gamma(5) * local.abs() + gamma(2) * p.abs())
 }
 
 /// The slab test (Kay and Kajiya) against the four children's boxes of a BVH node at once, with

@@ -2,7 +2,7 @@
 //! the pdf of that choice with respect to solid angle at the receiving point.
 
 use crate::flat::{FlatScene, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
-use crate::geometry::{gamma, triangle_normal, triangle_point};
+use crate::geometry::{sphere_point_at, triangle_normal, triangle_point};
 use crate::sampling::{
     orthonormal_basis, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
 };
@@ -48,11 +48,10 @@ pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> Lig
     if row.prim & PRIM_SPHERE_BIT != 0 {
         let sphere = &scene.spheres[(row.prim & !PRIM_SPHERE_BIT) as usize];
         let d = sample_uniform_sphere(u1, u2);
-        let local = sphere.radius * d;
-        let p = Vec3::from(sphere.center) + local;
+        let (p, p_err) = sphere_point_at(sphere, sphere.radius * d);
         return LightSample {
             p,
-            p_err: gamma(5) * local.abs() + gamma(2) * p.abs(),
+            p_err,
             n: sphere.normal(d),
             le: Vec3::from(scene.materials[sphere.material as usize].emission),
             pdf_area,

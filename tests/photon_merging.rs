@@ -74,19 +74,7 @@ fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
         return;
     };
     let (scene, flat) = load("scenes/tncg15_room.json");
-    let camera = hexray::camera::Camera::new(&scene.desc.camera, 64, 64);
-    let mut renderer = hexray::gpu::GpuRenderer::new(
-        &gpu.device,
-        &gpu.queue,
-        &flat,
-        camera,
-        1,
-        Faults::NONE,
-        hexray::gpu::Checks::Unchecked,
-        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
-        Method::Sppm,
-    )
-    .unwrap();
+    let mut renderer = gpu_renderer(gpu, &scene, &flat, 64, 64, 1, Method::Sppm, Faults::NONE);
     let vertices = points(20_000, 1);
     let queries = points(4096, 2);
     let min = hexray::merging::scene_bounds(&flat).0;

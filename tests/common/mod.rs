@@ -58,6 +58,7 @@ pub fn render_cpu_light_samples(
         Method::Path,
         light_samples,
         faults,
+        None,
     )
 }
 
@@ -73,7 +74,9 @@ pub fn render_cpu_method(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
-    render_cpu_flat(&scene, &flat, width, height, spp, seed, method, 1, faults)
+    render_cpu_flat(
+        &scene, &flat, width, height, spp, seed, method, 1, faults, None,
+    )
 }
 
 /// [`render_cpu_method`] for a merging method (sppm, vcm) with the radius schedule `radius`.
@@ -89,7 +92,7 @@ pub fn render_cpu_merging(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
-    render_cpu_flat_radius(
+    render_cpu_flat(
         &scene,
         &flat,
         width,
@@ -104,36 +107,9 @@ pub fn render_cpu_merging(
 }
 
 /// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
-/// the loaded scene's camera.
+/// the loaded scene's camera, with a merge radius schedule (None: the scene's default).
 #[allow(clippy::too_many_arguments)]
 fn render_cpu_flat(
-    scene: &Scene,
-    flat: &FlatScene,
-    width: u32,
-    height: u32,
-    spp: u32,
-    seed: u32,
-    method: Method,
-    light_samples: u32,
-    faults: Faults,
-) -> Film {
-    render_cpu_flat_radius(
-        scene,
-        flat,
-        width,
-        height,
-        spp,
-        seed,
-        method,
-        light_samples,
-        faults,
-        None,
-    )
-}
-
-/// [`render_cpu_flat`] with a merge radius schedule (None: the scene's default).
-#[allow(clippy::too_many_arguments)]
-fn render_cpu_flat_radius(
     scene: &Scene,
     flat: &FlatScene,
     width: u32,
@@ -258,6 +234,7 @@ pub fn render_gpu_light_samples(
         Method::Path,
         light_samples,
         faults,
+        None,
     )
 }
 
@@ -275,7 +252,7 @@ pub fn render_gpu_method(
 ) -> Film {
     let (scene, flat) = load(rel);
     render_gpu_flat(
-        gpu, &scene, &flat, width, height, spp, seed, method, 1, faults,
+        gpu, &scene, &flat, width, height, spp, seed, method, 1, faults, None,
     )
 }
 
@@ -293,7 +270,7 @@ pub fn render_gpu_merging(
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
-    render_gpu_flat_radius(
+    render_gpu_flat(
         gpu,
         &scene,
         &flat,
@@ -308,7 +285,8 @@ pub fn render_gpu_merging(
     )
 }
 
-/// The one GPU render every helper here ends in, with the kernel and residency the CLI uses.
+/// The one GPU render every helper here ends in, with the kernel and residency the CLI uses and
+/// a merge radius schedule (None: the scene's default).
 #[allow(clippy::too_many_arguments)]
 fn render_gpu_flat(
     gpu: &hexray::gpu::Gpu,
@@ -321,50 +299,9 @@ fn render_gpu_flat(
     method: Method,
     light_samples: u32,
     faults: Faults,
-) -> Film {
-    render_gpu_flat_radius(
-        gpu,
-        scene,
-        flat,
-        width,
-        height,
-        spp,
-        seed,
-        method,
-        light_samples,
-        faults,
-        None,
-    )
-}
-
-/// [`render_gpu_flat`] with a merge radius schedule (None: the scene's default).
-#[allow(clippy::too_many_arguments)]
-fn render_gpu_flat_radius(
-    gpu: &hexray::gpu::Gpu,
-    scene: &Scene,
-    flat: &FlatScene,
-    width: u32,
-    height: u32,
-    spp: u32,
-    seed: u32,
-    method: Method,
-    light_samples: u32,
-    faults: Faults,
     radius: Option<hexray::merging::MergeRadius>,
 ) -> Film {
-    let camera = Camera::new(&scene.desc.camera, width, height);
-    let mut r = hexray::gpu::GpuRenderer::new(
-        &gpu.device,
-        &gpu.queue,
-        flat,
-        camera,
-        seed,
-        faults,
-        hexray::gpu::Checks::Unchecked,
-        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), flat),
-        method,
-    )
-    .unwrap();
+    let mut r = gpu_renderer(gpu, scene, flat, width, height, seed, method, faults);
     r.set_light_samples(light_samples);
     if let Some(radius) = radius {
         r.set_merge_radius(radius);
@@ -372,6 +309,33 @@ fn render_gpu_flat_radius(
     let mut film = Film::new(width, height);
     r.render(0, spp, &mut film).unwrap();
     film
+}
+
+/// A GPU renderer of a flattened scene seen by the loaded scene's camera, with the kernel and
+/// residency the CLI uses.
+#[allow(clippy::too_many_arguments)]
+pub fn gpu_renderer(
+    gpu: &hexray::gpu::Gpu,
+    scene: &Scene,
+    flat: &FlatScene,
+    width: u32,
+    height: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> hexray::gpu::GpuRenderer {
+    hexray::gpu::GpuRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        flat,
+        Camera::new(&scene.desc.camera, width, height),
+        seed,
+        faults,
+        hexray::gpu::Checks::Unchecked,
+        hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), flat),
+        method,
+    )
+    .unwrap()
 }
 
 /// Loads a scene file and applies `change` to its description (move the camera, change a
@@ -418,6 +382,7 @@ pub fn render_cpu_scene_method(
         method,
         1,
         faults,
+        None,
     )
 }
 
@@ -448,7 +413,7 @@ pub fn render_gpu_scene_method(
 ) -> Film {
     let flat = FlatScene::build(scene);
     render_gpu_flat(
-        gpu, scene, &flat, width, height, spp, seed, method, 1, faults,
+        gpu, scene, &flat, width, height, spp, seed, method, 1, faults, None,
     )
 }
 
