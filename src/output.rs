@@ -81,7 +81,7 @@ pub fn check_writable(out: &Path, variance: bool) -> Result<()> {
 }
 
 /// Writes `bytes_of(tmp)` with `write` and renames it over `path`.
-fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+pub(crate) fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
     if let Some(d) = dir {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
@@ -208,6 +208,39 @@ pub fn latin1_unescape(s: &str) -> String {
     out
 }
 
+/// The `hexray` metadata of an EXR's first header, without reading its pixels.
+pub fn read_exr_metadata(path: &Path) -> Result<Metadata> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let header = meta
+        .headers
+        .first()
+        .with_context(|| format!("{}: no image in the file", path.display()))?;
+    Ok(metadata_of(&header.own_attributes.other))
+}
+
+/// The render metadata among an EXR header's custom attributes.
+fn metadata_of(
+    attributes: &std::collections::HashMap<
+        exr::meta::attribute::Text,
+        exr::meta::attribute::AttributeValue,
+    >,
+) -> Metadata {
+    let mut meta = Metadata::default();
+    for (k, v) in attributes {
+        if let (METADATA_ATTRIBUTE, exr::meta::attribute::AttributeValue::Text(t)) =
+            (k.to_string().as_str(), v)
+        {
+            for line in latin1_unescape(&t.to_string()).lines() {
+                if let Some((key, value)) = line.split_once('=') {
+                    meta.set(key, value);
+                }
+            }
+        }
+    }
+    meta
+}
+
 /// Reads the first RGB(A) layer of an EXR and its `hexray:` metadata.
 pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
     let image = read_first_rgba_layer_from_file(
@@ -223,18 +256,7 @@ pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
         },
     )
     .with_context(|| format!("reading {}", path.display()))?;
-    let mut meta = Metadata::default();
-    for (k, v) in &image.layer_data.attributes.other {
-        if let (METADATA_ATTRIBUTE, exr::meta::attribute::AttributeValue::Text(t)) =
-            (k.to_string().as_str(), v)
-        {
-            for line in latin1_unescape(&t.to_string()).lines() {
-                if let Some((key, value)) = line.split_once('=') {
-                    meta.set(key, value);
-                }
-            }
-        }
-    }
+    let meta = metadata_of(&image.layer_data.attributes.other);
     Ok((image.layer_data.channel_data.pixels, meta))
 }
 

@@ -50,14 +50,14 @@ pub struct RenderReport {
 const TARGET_PASS_SECONDS: f64 = 0.25;
 
 /// Runs passes until the budget is spent, `stop` is set or the backend fails; the samples of
-/// every completed pass stay in `film` in all cases. `on_pass(spp_done, elapsed)` is called
-/// after each pass (progress bars, curves).
+/// every completed pass stay in `film` in all cases. `on_pass(film, spp_done, elapsed)` is
+/// called after each pass (progress, checkpoints).
 pub fn render_progressive(
     backend: &mut dyn Backend,
     film: &mut Film,
     budget: Budget,
     stop: &AtomicBool,
-    mut on_pass: impl FnMut(u32, f64),
+    mut on_pass: impl FnMut(&Film, u32, f64),
 ) -> RenderReport {
     assert!(budget.spp.is_some() || budget.seconds.is_some());
     let start = Instant::now();
@@ -99,13 +99,43 @@ pub fn render_progressive(
         // the cost again on every pass and keep the latest.
         per_spp = Some(dt / count as f64);
         done += count;
-        on_pass(done, start.elapsed().as_secs_f64());
+        on_pass(film, done, start.elapsed().as_secs_f64());
     };
     RenderReport {
         spp: film.spp() as u32,
         seconds: start.elapsed().as_secs_f64(),
         reason,
     }
+}
+
+/// Light vertices per light subpath assumed by [`host_bytes_per_pixel`]: well above the mean
+/// subpath length of the reference scenes (Russian roulette ends most subpaths within 3-5
+/// bounces), since the buffer grows to the longest iteration.
+const LIGHT_VERTICES_PER_PIXEL: u64 = 8;
+
+/// An estimate of the host memory a render holds per pixel, for the check before a render
+/// starts: the film's f64 sums, the EXR, variance and PNG images, and for the methods that trace
+/// light subpaths the splat film, n_c per pixel, the light vertices (one subpath per pixel) and
+/// the hash grid over them.
+pub fn host_bytes_per_pixel(method: crate::method::Method) -> u64 {
+    use std::mem::size_of;
+    let film = size_of::<crate::film::PixelStats>() as u64;
+    let outputs = 2 * size_of::<[f32; 3]>() as u64 + 3;
+    let mut bytes = film + outputs;
+    if method.splats() {
+        let vertices = LIGHT_VERTICES_PER_PIXEL
+            * (size_of::<crate::subpath::LightVertex>() + size_of::<[f32; 4]>() + 4) as u64;
+        bytes += size_of::<crate::splat::SplatCell>() as u64 + 4 + 4 + vertices;
+    }
+    bytes
+}
+
+/// Memory the system can give without swapping (Linux's MemAvailable), if known.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// BDPT's choices for a render's provenance: τ of the Russian roulette on visibility rays, and

@@ -57,7 +57,7 @@ fn cases() -> Vec<Case> {
                 s["spheres"][0]["radius"] = json!(1e-30);
             },
             path: "spheres[0].radius",
-            message: "zero area in f32",
+            message: "in f32, too small to sample",
             on_line: Some("1e-30"),
         },
         Case {
@@ -174,6 +174,40 @@ fn cases() -> Vec<Case> {
             },
             path: "camera",
             message: "missing field `eye`",
+            on_line: None,
+        },
+        // Values valid in f64 that the renderer, in f32, could not carry (issue 16): each
+        // used to pass validation and panic, or drop every sample with exit 0.
+        Case {
+            name: "radiance that is 0 in f32",
+            base: ROOM,
+            edit: |s| s["materials"]["light"]["radiance"] = json!([1e-46, 20, 20]),
+            path: "materials.light.radiance[0]",
+            message: "is outside [1e-30, 1e30]",
+            on_line: Some("1e-46"),
+        },
+        Case {
+            name: "radiance that overflows a path's throughput",
+            base: ROOM,
+            edit: |s| s["materials"]["light"]["radiance"] = json!([20, 1.2e38, 20]),
+            path: "materials.light.radiance[1]",
+            message: "is outside [1e-30, 1e30]",
+            on_line: None,
+        },
+        Case {
+            name: "emitter vertices whose squared distances overflow f32",
+            base: ROOM,
+            edit: |s| s["triangles"][20]["v"][1] = json!([4e18, 1e18, 4.99]),
+            path: "triangles[20].v[1][0]",
+            message: "where squared distances overflow",
+            on_line: None,
+        },
+        Case {
+            name: "emitter whose area is 0 in f32",
+            base: ROOM,
+            edit: |s| s["triangles"][20]["v"] = json!([[0, 0, 0], [1e-25, 0, 0], [0, 1e-25, 0]]),
+            path: "triangles[20].v",
+            message: "has area 0e0 in f32",
             on_line: None,
         },
         Case {
@@ -356,6 +390,9 @@ fn bad_arguments_exit_2_before_rendering() {
         vec!["--width", "0"],
         vec!["--backend", "quantum"],
         vec!["--out", "x.png"],
+        vec!["--exposure", "NaN"],
+        vec!["--exposure", "inf"],
+        vec!["--checkpoint", "0"],
     ] {
         let mut all = vec![
             "render",
@@ -373,4 +410,85 @@ fn bad_arguments_exit_2_before_rendering() {
         );
         assert!(!Path::new(&exr).exists() && !Path::new("x.png").exists());
     }
+}
+
+#[test]
+fn a_scene_file_beyond_the_size_limit_is_refused_without_reading_it_all() {
+    let o = hexray(&["render", "/dev/zero", "--out", "/tmp/hexray-never.exr"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("larger than 256 MiB"), "{err}");
+}
+
+#[test]
+fn invalid_utf8_is_located() {
+    let dir = temp_dir("utf8");
+    let scene = dir.join("s.json");
+    std::fs::write(&scene, b"{\n  \"name\": \"caf\xe9\"\n}").unwrap();
+    let o = hexray(&["render", scene.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("s.json:2:15") && err.contains("not valid UTF-8"),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_image_too_large_for_memory_is_refused_before_allocating() {
+    let scene = repo(ROOM);
+    let o = hexray(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--out",
+        "/tmp/hexray-never.exr",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("GiB of memory"), "{err}");
+}
+
+#[test]
+fn radiance_beyond_the_splat_range_is_refused_for_the_splatting_methods_only() {
+    let dir = temp_dir("splat");
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(repo(ROOM)).unwrap()).unwrap();
+    v["materials"]["light"]["radiance"] = json!([1e12, 1e12, 1e12]);
+    let scene = dir.join("bright.json");
+    std::fs::write(&scene, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let exr = dir.join("b.exr");
+    let run = |method: &str| {
+        hexray(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--method",
+            method,
+            "--backend",
+            "cpu",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "2",
+            "-q",
+            "--out",
+            exr.to_str().unwrap(),
+        ])
+    };
+    for m in ["light", "bdpt", "sppm", "vcm"] {
+        let o = run(m);
+        assert_eq!(o.status.code(), Some(2), "{m}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("materials.light.radiance[0]") && err.contains("fixed point"),
+            "{err}"
+        );
+        assert!(!exr.exists());
+    }
+    let o = run("path");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

@@ -71,7 +71,7 @@ fn a_lost_device_keeps_the_samples_taken_before() {
         &mut film,
         budget,
         &AtomicBool::new(false),
-        |_, _| {},
+        |_, _, _| {},
     );
     let StopReason::Failed(why) = &report.reason else {
         panic!("the render did not fail: {:?}", report.reason);

@@ -26,6 +26,7 @@ mod light_samples;
 mod light_tracing;
 mod merge;
 mod mis_weights;
+mod nothing_lost;
 mod photon_merging;
 mod precision;
 mod reintersect;

@@ -10,6 +10,9 @@ pub use locate::JsonPath;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+/// The largest scene file read (scene files are a few kB to a few MB).
+pub const MAX_SCENE_BYTES: u64 = 256 << 20;
+
 /// A scene that parsed and passed validation: everything the renderer needs, plus what the
 /// outputs record about where it came from.
 #[derive(Debug, Clone)]
@@ -58,12 +61,54 @@ impl Scene {
     /// Reads, parses and validates a scene file. Nothing is rendered or written here, so a bad
     /// scene is reported before any output exists.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        let error = |message: String, help: &str| SceneError {
             file: path.to_path_buf(),
             line_col: None,
             path: String::new(),
-            message: format!("cannot read the scene file: {e}"),
-            help: "check the path; the default scene is scenes/tncg15_room.json".into(),
+            message,
+            help: help.into(),
+        };
+        let unreadable = |e: std::io::Error| {
+            error(
+                format!("cannot read the scene file: {e}"),
+                "check the path; the default scene is scenes/tncg15_room.json",
+            )
+        };
+        // Read at most one byte past the limit, so that /dev/zero or a huge file is refused
+        // without reading it all.
+        use std::io::Read;
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .map_err(unreadable)?
+            .take(MAX_SCENE_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(unreadable)?;
+        if bytes.len() as u64 > MAX_SCENE_BYTES {
+            return Err(error(
+                format!(
+                    "the scene file is larger than {} MiB",
+                    MAX_SCENE_BYTES >> 20
+                ),
+                "a scene file holds a camera, materials and a few primitives; is this the \
+                 right file?",
+            ));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.len()
+                - before
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |i| i + 1)
+                + 1;
+            SceneError {
+                line_col: Some((line, column)),
+                ..error(
+                    "the scene file is not valid UTF-8 here".into(),
+                    "save the file as UTF-8",
+                )
+            }
         })?;
         Self::from_json(&text, path)
     }
@@ -123,6 +168,21 @@ impl Scene {
             path: path.to_path_buf(),
             sha1: sha1_smol::Sha1::from(text.as_bytes()).digest().to_string(),
         })
+    }
+}
+
+impl Scene {
+    /// A validation issue found after loading (e.g. one that depends on the method), located
+    /// in the scene file as the loader's own.
+    pub fn error_at(&self, issue: validate::Issue) -> SceneError {
+        let text = std::fs::read_to_string(&self.path).unwrap_or_default();
+        SceneError {
+            file: self.path.clone(),
+            line_col: locate::locate(&text, &issue.path),
+            path: issue.path.to_string(),
+            message: issue.message,
+            help: issue.help,
+        }
     }
 }
 

@@ -40,6 +40,69 @@ fn check_vec(v: &[f64; 3], path: &JsonPath) -> Result<(), Issue> {
     Ok(())
 }
 
+/// The largest coordinate magnitude (and sphere radius) accepted. The integrators form
+/// products of two squared distances in f32 (a solid-angle pdf times an area, the MIS weights'
+/// pdf ratios), so the scene's extent squared, squared again, must stay below f32's 3.4e38:
+/// (2e9 * sqrt 3)^4 is 1.4e38.
+pub const MAX_COORDINATE: f64 = 1e9;
+/// Coordinates up to this magnitude are covered by the precision tests (docs/stability.md);
+/// beyond it a scene renders with a warning.
+pub const TESTED_COORDINATE: f64 = 1e5;
+/// Emitted radiance per channel is 0 or within these bounds: a path's throughput multiplies
+/// it by factors of either sign of exponent, and f32 must carry the product (1e-46 is 0 in
+/// f32, and 1.2e38 overflows at the first such factor, so every sample would be dropped).
+pub const MIN_RADIANCE: f64 = 1e-30;
+pub const MAX_RADIANCE: f64 = 1e30;
+
+/// A point: finite in f32 and within [`MAX_COORDINATE`] of the origin on every axis.
+fn check_point(v: &[f64; 3], path: &JsonPath) -> Result<(), Issue> {
+    check_vec(v, path)?;
+    if let Some(i) = v.iter().position(|x| x.abs() > MAX_COORDINATE) {
+        return Err(issue(
+            path.index(i),
+            format!(
+                "coordinate {:e} is beyond +-{MAX_COORDINATE:e}, where squared distances overflow \
+                 32-bit floats",
+                v[i]
+            ),
+            "scale the scene down or move it nearer the origin (the renderer is tested to 1e5)",
+        ));
+    }
+    Ok(())
+}
+
+/// The largest coordinate magnitude in the scene's geometry and camera.
+pub fn extent(desc: &SceneDesc) -> f64 {
+    let pts = desc
+        .triangles
+        .iter()
+        .flat_map(|t| t.v.iter())
+        .chain(desc.spheres.iter().map(|s| &s.center))
+        .chain(desc.boxes.iter().flat_map(|b| [&b.min, &b.max]))
+        .chain([&desc.camera.eye, &desc.camera.look_at]);
+    let spheres = desc
+        .spheres
+        .iter()
+        .map(|s| s.center.iter().fold(0.0f64, |m, x| m.max(x.abs())) + s.radius);
+    pts.map(|p| p.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+        .chain(spheres)
+        .fold(0.0, f64::max)
+}
+
+/// An emitter's area as the emitter table computes it in f32 must be a normal number: its
+/// reciprocal is the area pdf of every light sample on it.
+fn check_emitter_area(area: f32, path: JsonPath, what: &str) -> Result<(), Issue> {
+    if area.is_finite() && area >= f32::MIN_POSITIVE {
+        return Ok(());
+    }
+    Err(issue(
+        path,
+        format!("this emitting {what} has area {area:e} in f32, too small to sample"),
+        "make the light larger (its area must exceed 1.2e-38 in 32-bit floats), or scale the \
+         whole scene up",
+    ))
+}
+
 fn check_unit_rgb(v: &[f64; 3], path: &JsonPath, what: &str) -> Result<(), Issue> {
     check_vec(v, path)?;
     for (i, &x) in v.iter().enumerate() {
@@ -109,8 +172,8 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
     // Camera: a finite, non-degenerate pinhole.
     let cam = &desc.camera;
     let cp = root.key("camera");
-    check_vec(&cam.eye, &cp.key("eye"))?;
-    check_vec(&cam.look_at, &cp.key("look_at"))?;
+    check_point(&cam.eye, &cp.key("eye"))?;
+    check_point(&cam.look_at, &cp.key("look_at"))?;
     check_vec(&cam.up, &cp.key("up"))?;
     if !(cam.vfov_deg.is_finite() && cam.vfov_deg > 0.0 && cam.vfov_deg < 180.0) {
         return Err(issue(
@@ -170,6 +233,20 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
                         "emitted radiance is >= 0 in every channel",
                     ));
                 }
+                if let Some(i) = radiance.iter().position(|&x| {
+                    x != 0.0 && !(MIN_RADIANCE as f32..=MAX_RADIANCE as f32).contains(&(x as f32))
+                }) {
+                    return Err(issue(
+                        p.key("radiance").index(i),
+                        format!(
+                            "radiance {:e} is outside [{MIN_RADIANCE:e}, {MAX_RADIANCE:e}], the \
+                             range a path's 32-bit throughput carries (0 is allowed)",
+                            radiance[i]
+                        ),
+                        "scale the lights into that range and set the image's brightness with \
+                         --exposure",
+                    ));
+                }
                 if !one_sided {
                     return Err(issue(
                         p.key("one_sided"),
@@ -183,12 +260,18 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         }
     }
 
+    // Whether a material emits (after the materials' checks, its radiance is 0 or normal).
+    let emits = |name: &str| {
+        matches!(desc.materials.get(name),
+            Some(MaterialDesc::Emitter { radiance, .. }) if radiance.iter().any(|&x| x > 0.0))
+    };
+
     // Triangles: finite vertices, a material that exists, a non-zero area in f32.
     let tp = root.key("triangles");
     for (i, t) in desc.triangles.iter().enumerate() {
         let p = tp.index(i);
         for (k, v) in t.v.iter().enumerate() {
-            check_vec(v, &p.key("v").index(k))?;
+            check_point(v, &p.key("v").index(k))?;
         }
         check_material_ref(&t.material, &p.key("material"), desc)?;
         // The renderer sees the vertices rounded to f32: a triangle far from the origin can
@@ -205,37 +288,36 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
                 "remove it, correct a vertex, or move the scene nearer the origin",
             ));
         }
+        if emits(&t.material) {
+            let f = t.v.map(|p| glam::Vec3::from(p.map(|x| x as f32)));
+            let area = 0.5 * (f[1] - f[0]).cross(f[2] - f[0]).length();
+            check_emitter_area(area, p.key("v"), "triangle")?;
+        }
     }
 
     // Spheres: finite centre, positive radius, a material that exists, an emitter's area > 0.
     let sp = root.key("spheres");
     for (i, s) in desc.spheres.iter().enumerate() {
         let p = sp.index(i);
-        check_vec(&s.center, &p.key("center"))?;
-        if !(finite_f32(s.radius) && s.radius > 0.0) {
+        check_point(&s.center, &p.key("center"))?;
+        if !(finite_f32(s.radius) && s.radius > 0.0 && s.radius <= MAX_COORDINATE) {
             return Err(issue(
                 p.key("radius"),
-                format!("radius {} is not > 0", s.radius),
-                "give the sphere a positive radius",
+                if s.radius > MAX_COORDINATE {
+                    format!("radius {:e} is beyond {MAX_COORDINATE:e}", s.radius)
+                } else {
+                    format!("radius {} is not > 0", s.radius)
+                },
+                "give the sphere a positive radius, at most 1e9",
             ));
         }
         check_material_ref(&s.material, &p.key("material"), desc)?;
         // An emitting sphere is sampled by area: 4 pi r^2 must be > 0 in f32, as the emitter
         // table computes it.
-        let emits = matches!(
-            desc.materials.get(&s.material),
-            Some(MaterialDesc::Emitter { .. })
-        );
         let radius = s.radius as f32;
-        if emits && 4.0 * std::f32::consts::PI * radius * radius == 0.0 {
-            return Err(issue(
-                p.key("radius"),
-                format!(
-                    "an emitting sphere of radius {} has zero area in f32",
-                    s.radius
-                ),
-                "give the light a radius whose square is a normal 32-bit float (> 1e-19)",
-            ));
+        if emits(&s.material) {
+            let area = 4.0 * std::f32::consts::PI * radius * radius;
+            check_emitter_area(area, p.key("radius"), "sphere")?;
         }
     }
 
@@ -243,8 +325,8 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
     let bp = root.key("boxes");
     for (i, b) in desc.boxes.iter().enumerate() {
         let p = bp.index(i);
-        check_vec(&b.min, &p.key("min"))?;
-        check_vec(&b.max, &p.key("max"))?;
+        check_point(&b.min, &p.key("min"))?;
+        check_point(&b.max, &p.key("max"))?;
         // Compared as the renderer sees them, rounded to f32: a thin box far from the origin
         // can flatten there.
         if let Some(a) = (0..3).find(|&a| b.min[a] as f32 >= b.max[a] as f32) {
@@ -261,13 +343,14 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
             ));
         }
         check_material_ref(&b.material, &p.key("material"), desc)?;
+        if emits(&b.material) {
+            let d = [0, 1, 2].map(|a| b.max[a] as f32 - b.min[a] as f32);
+            let smallest = (d[0] * d[1]).min(d[1] * d[2]).min(d[0] * d[2]);
+            check_emitter_area(smallest, p.key("max"), "box face")?;
+        }
     }
 
     // At least one primitive that emits light, or the image is black by construction.
-    let emits = |name: &str| {
-        matches!(desc.materials.get(name),
-            Some(MaterialDesc::Emitter { radiance, .. }) if radiance.iter().any(|&x| x > 0.0))
-    };
     if !desc.triangles.iter().any(|t| emits(&t.material))
         && !desc.boxes.iter().any(|b| emits(&b.material))
         && !desc.spheres.iter().any(|s| emits(&s.material))
@@ -280,6 +363,42 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
              radiance, wound so that (v1 - v0) x (v2 - v0) faces the scene, or a sphere of that \
              material",
         ));
+    }
+    Ok(())
+}
+
+/// Emitted radiance that the methods tracing light subpaths (light, bdpt, sppm, vcm) can
+/// carry: they sum splats in 64-bit fixed point (`splat.rs`: resolution 6e-8, range 1.1e12),
+/// so a splat must neither overflow (measured on cornell_box: radiance 1e10 keeps every sample,
+/// 1e15 drops 60 %) nor round away (a light of 1e-20 would splat nothing and leave the image
+/// black without a word).
+pub const SPLAT_RADIANCE: (f64, f64) = (1e-3, 1e9);
+
+/// Refuses, for the splatting methods, an emitter whose radiance is outside [`SPLAT_RADIANCE`].
+pub fn check_splat_range(desc: &SceneDesc, method: &str) -> Result<(), Issue> {
+    let (lo, hi) = SPLAT_RADIANCE;
+    for (name, m) in &desc.materials {
+        if let MaterialDesc::Emitter { radiance, .. } = m {
+            if let Some(i) = radiance
+                .iter()
+                .position(|&x| x != 0.0 && !(lo..=hi).contains(&x))
+            {
+                return Err(issue(
+                    JsonPath::root()
+                        .key("materials")
+                        .key(name)
+                        .key("radiance")
+                        .index(i),
+                    format!(
+                        "radiance {:e} is outside [{lo:e}, {hi:e}], the range --method {method} \
+                         sums exactly (its light splats are 64-bit fixed point)",
+                        radiance[i]
+                    ),
+                    "scale the lights into that range and set the brightness with --exposure, \
+                     or render with --method path",
+                ));
+            }
+        }
     }
     Ok(())
 }
