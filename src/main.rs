@@ -1112,7 +1112,11 @@ fn scene_info(path: &Path) -> ExitCode {
         "triangles: {} ({} inline, {} from meshes, {} from boxes)",
         flat.triangles.len(),
         scene.desc.triangles.len(),
-        scene.meshes.iter().map(|m| m.triangles.len()).sum::<usize>(),
+        scene
+            .meshes
+            .iter()
+            .map(|m| m.triangles.len())
+            .sum::<usize>(),
         12 * scene.desc.boxes.len()
     );
     for line in mesh_lines(&scene) {

@@ -167,13 +167,22 @@ pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
             "triangles",
             at_least(std::mem::size_of_val(&scene.triangles[..]), 64),
         ),
-        ("spheres", at_least(std::mem::size_of_val(&scene.spheres[..]), 32)),
+        (
+            "spheres",
+            at_least(std::mem::size_of_val(&scene.spheres[..]), 32),
+        ),
         (
             "materials",
             at_least(std::mem::size_of_val(&scene.materials[..]), 32),
         ),
-        ("emitters", at_least(std::mem::size_of_val(&scene.emitters[..]), 16)),
-        ("nodes", at_least(std::mem::size_of_val(&scene.nodes[..]), 128)),
+        (
+            "emitters",
+            at_least(std::mem::size_of_val(&scene.emitters[..]), 16),
+        ),
+        (
+            "nodes",
+            at_least(std::mem::size_of_val(&scene.nodes[..]), 128),
+        ),
         ("prims", at_least(16 * scene.prims.len().div_ceil(4), 16)),
     ]
 }
@@ -203,7 +212,9 @@ pub fn check_scene_fits(
                 Residency::Storage => "--backend cpu (no such limit)",
             };
             return Err(format!(
-                "the scene's {name} array is {:.1} MiB ({} triangles), more than this adapter's                  largest {what} of {:.1} MiB (lavapipe allows 128 MiB for storage, about 2                  million triangles); render it with {alternative}, or use fewer triangles",
+                "the scene's {name} array is {:.1} MiB ({} triangles), more than this adapter's \
+                 largest {what} of {:.3} MiB (lavapipe's storage limit is 128 MiB, about 2 \
+                 million triangles); render it with {alternative}, or use fewer triangles",
                 mib(bytes as u64),
                 scene.triangles.len(),
                 mib(limit)
@@ -316,6 +327,8 @@ impl GpuRenderer {
         residency: Residency,
         method: Method,
     ) -> Result<GpuRenderer> {
+        // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
+        check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
         let (width, height) = (camera.width, camera.height);
         let pixels = (width as u64) * (height as u64);
         let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));

@@ -212,7 +212,10 @@ impl MeshDesc {
     /// on [`MeshDesc`].
     pub fn transform(&self) -> MeshTransform {
         let scale = self.scale.map_or([1.0; 3], Scale::per_axis);
-        let rotation = self.rotate.as_ref().map(|r| rotation_matrix(r.axis, r.degrees));
+        let rotation = self
+            .rotate
+            .as_ref()
+            .map(|r| rotation_matrix(r.axis, r.degrees));
         MeshTransform {
             scale,
             rotation,
@@ -233,7 +236,11 @@ impl MeshTransform {
     /// Where vertex `v` goes, in f64.
     #[inline]
     pub fn apply(&self, v: [f64; 3]) -> [f64; 3] {
-        let s = [v[0] * self.scale[0], v[1] * self.scale[1], v[2] * self.scale[2]];
+        let s = [
+            v[0] * self.scale[0],
+            v[1] * self.scale[1],
+            v[2] * self.scale[2],
+        ];
         let r = match &self.rotation {
             None => s,
             Some(m) => [0, 1, 2].map(|i| m[i][0] * s[0] + m[i][1] * s[1] + m[i][2] * s[2]),

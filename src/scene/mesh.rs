@@ -163,7 +163,7 @@ impl Faces {
             faces: 0,
         }
     }
-    /// Starts face `self.faces`; returns its index.
+    /// Adds one triangle of the fan of face `self.faces`.
     fn fan(&mut self, first: u32, prev: u32, next: u32) {
         self.triangles.push([first, prev, next]);
         self.face_of.push(self.faces as u32);
@@ -281,7 +281,12 @@ fn ply_header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), MeshError> 
             .map_err(|_| err(format!("header line {line_no} is not text"), PLY_HELP))?
             .trim_end_matches('\r');
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
-        let bad = || err(format!("header line {line_no} `{line}` is not understood"), PLY_HELP);
+        let bad = || {
+            err(
+                format!("header line {line_no} `{line}` is not understood"),
+                PLY_HELP,
+            )
+        };
         if line_no == 1 {
             if line.trim() != "ply" {
                 return Err(err("the file does not start with `ply`", PLY_HELP));
@@ -440,7 +445,11 @@ impl<'a> Body<'a> {
             let tok = self.token(what)?;
             let bad = || {
                 err(
-                    format!("{} `{tok}` is not a number of type {t:?}{}", what(), self.at()),
+                    format!(
+                        "{} `{tok}` is not a number of type {t:?}{}",
+                        what(),
+                        self.at()
+                    ),
                     "an ASCII PLY's body holds numbers separated by white space",
                 )
             };
@@ -527,12 +536,15 @@ fn min_record(e: &Element, format: Format) -> u64 {
 
 fn parse_ply(bytes: &[u8]) -> Result<MeshData, MeshError> {
     let (format, elements, body_start) = ply_header(bytes)?;
-    let vertex = elements.iter().find(|e| e.name == "vertex").ok_or_else(|| {
-        err(
-            "the PLY file has no `vertex` element",
-            "a PLY mesh needs `element vertex N` with x, y, z properties",
-        )
-    })?;
+    let vertex = elements
+        .iter()
+        .find(|e| e.name == "vertex")
+        .ok_or_else(|| {
+            err(
+                "the PLY file has no `vertex` element",
+                "a PLY mesh needs `element vertex N` with x, y, z properties",
+            )
+        })?;
     let face = elements.iter().find(|e| e.name == "face").ok_or_else(|| {
         err(
             "the PLY file has no `face` element",
@@ -609,7 +621,7 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, MeshError> {
                 for (col, (_, prop)) in e.props.iter().enumerate() {
                     match prop {
                         Prop::List(c, i) if col == face_col => {
-                            read_face(&mut body, &mut faces, *c, *i, n_vertices, k as usize)?
+                            read_face(&mut body, &mut faces, (*c, *i), n_vertices, (k, e.count))?
                         }
                         _ => body.skip(prop, &what)?,
                     }
@@ -625,15 +637,16 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, MeshError> {
     Ok(faces.into_data(positions))
 }
 
+/// Reads face `face.0` of `face.1`, a list of (count type, index type) `types`.
 fn read_face(
     body: &mut Body,
     faces: &mut Faces,
-    count_type: Scalar,
-    index_type: Scalar,
+    (count_type, index_type): (Scalar, Scalar),
     n_vertices: u64,
-    face: usize,
+    (face, of): (u64, u64),
 ) -> Result<(), MeshError> {
-    let what = || format!("face {face}");
+    let what = || format!("face {face} of {of}");
+    let face = face as usize;
     let n = body.count(count_type, &what)?;
     if n < 3 {
         return Err(too_few(face, n, &body.at()));

@@ -9,8 +9,8 @@ pub use format::{
     BoxDesc, CameraDesc, MaterialDesc, MeshDesc, MeshTransform, RotateDesc, Scale, SceneDesc,
     SphereDesc, TriangleDesc,
 };
-pub use mesh::LoadedMesh;
 pub use locate::JsonPath;
+pub use mesh::LoadedMesh;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
