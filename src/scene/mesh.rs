@@ -555,12 +555,6 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, MeshError> {
     let xyz = xyz_columns(vertex)?;
     let face_col = face_column(face)?;
     let n_vertices = vertex.count;
-    if n_vertices > u32::MAX as u64 {
-        return Err(err(
-            format!("{n_vertices} vertices are more than 2^32 - 1"),
-            "split the mesh into several files",
-        ));
-    }
 
     // The header's counts against the file's size: every element takes at least min_record
     // bytes per instance, so counts the rest of the file cannot hold are refused before any
@@ -584,6 +578,13 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, MeshError> {
                 counts.join(", ")
             ),
             "the file is truncated or its header is wrong: export or download it again",
+        ));
+    }
+
+    if n_vertices > u32::MAX as u64 {
+        return Err(err(
+            format!("{n_vertices} vertices are more than 2^32 - 1"),
+            "split the mesh into several files",
         ));
     }
 
