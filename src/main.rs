@@ -1083,12 +1083,11 @@ fn scene_info(path: &Path) -> ExitCode {
     let mut out = std::io::stdout().lock();
     let mib = |b: usize| b as f64 / (1u64 << 20) as f64;
     let (lo, hi) = flat.bounds();
-    let bytes = |v: usize, size: usize| v * size;
     let cpu = [
         ("triangles", std::mem::size_of_val(&flat.triangles[..])),
         ("packs", std::mem::size_of_val(&flat.packs[..])),
         ("nodes", std::mem::size_of_val(&flat.nodes[..])),
-        ("prims", bytes(flat.prims.len(), 4)),
+        ("prims", std::mem::size_of_val(&flat.prims[..])),
         (
             "other",
             std::mem::size_of_val(&flat.spheres[..])

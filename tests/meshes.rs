@@ -781,3 +781,33 @@ fn the_gpu_renders_the_bunny_room_as_the_cpu_does() {
     eprintln!("bunny_room at {SPP} spp, {SIZE}x{SIZE}: {p}");
     assert!(p.same(), "bunny_room: {p}");
 }
+
+#[test]
+fn a_scene_array_beyond_the_gpu_binding_limit_is_refused_in_a_sentence() {
+    use hexray::gpu::render::check_scene_fits;
+    use hexray::gpu::Residency;
+    let (_, flat) = load("scenes/bunny_room.json");
+    // bunny_room's 3700 triangles are 0.23 MiB: over a 128 KiB storage binding, under 128 MiB.
+    let small = wgpu::Limits {
+        max_storage_buffer_binding_size: 128 << 10,
+        ..wgpu::Limits::default()
+    };
+    let e = check_scene_fits(&small, Residency::Storage, &flat).unwrap_err();
+    assert!(
+        e.contains("the scene's triangles array is 0.2 MiB (3700 triangles)")
+            && e.contains("0.125 MiB")
+            && e.contains("--backend cpu"),
+        "{e}"
+    );
+    let lavapipe = wgpu::Limits {
+        max_storage_buffer_binding_size: 128 << 20,
+        ..wgpu::Limits::default()
+    };
+    assert_eq!(
+        check_scene_fits(&lavapipe, Residency::Storage, &flat),
+        Ok(())
+    );
+    // Uniform buffers (64 KiB by default) do not hold it: the storage residency is named.
+    let e = check_scene_fits(&lavapipe, Residency::Uniform, &flat).unwrap_err();
+    assert!(e.contains("--scene-residency storage"), "{e}");
+}

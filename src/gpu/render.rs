@@ -196,11 +196,15 @@ pub fn check_scene_fits(
 ) -> Result<(), String> {
     let (limit, what) = match residency {
         Residency::Storage => (
-            (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size),
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
             "storage buffer binding",
         ),
         Residency::Uniform => (
-            (limits.max_uniform_buffer_binding_size as u64).min(limits.max_buffer_size),
+            limits
+                .max_uniform_buffer_binding_size
+                .min(limits.max_buffer_size),
             "uniform buffer binding",
         ),
     };
