@@ -811,3 +811,31 @@ fn a_scene_array_beyond_the_gpu_binding_limit_is_refused_in_a_sentence() {
     let e = check_scene_fits(&lavapipe, Residency::Uniform, &flat).unwrap_err();
     assert!(e.contains("--scene-residency storage"), "{e}");
 }
+
+#[test]
+fn the_scene_sha1_covers_the_scene_file_and_each_mesh_file() {
+    let dir = temp_dir("sha1");
+    let mesh = tetra_ply(TETRA_V, TETRA_F);
+    std::fs::write(dir.join("t.ply"), &mesh).unwrap();
+    let mut s = room();
+    s["meshes"] = json!([{ "file": "t.ply", "material": "white", "translate": [7, 0, -4] }]);
+    let path = write_scene(&dir, "scene.json", &s);
+    let text = std::fs::read(&path).unwrap();
+    let mut want = sha1_smol::Sha1::from(&text);
+    want.update(&mesh);
+    let first = Scene::load(&path).unwrap().sha1;
+    assert_eq!(first, want.digest().to_string());
+    // Another vertex in the mesh file, the same scene file: another SHA-1.
+    std::fs::write(
+        dir.join("t.ply"),
+        tetra_ply("0 0 0\n1 0 0\n0 1 0\n0 0 2\n", TETRA_F),
+    )
+    .unwrap();
+    assert_ne!(Scene::load(&path).unwrap().sha1, first);
+    // Without meshes it is the scene file's own, as before meshes existed.
+    let bare = std::fs::read(repo(ROOM)).unwrap();
+    assert_eq!(
+        Scene::load(&repo(ROOM)).unwrap().sha1,
+        sha1_smol::Sha1::from(&bare).digest().to_string()
+    );
+}
