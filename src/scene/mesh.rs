@@ -2,16 +2,22 @@
 //! vertex positions and fan-triangulated faces, then placed by a [`MeshTransform`] and rounded
 //! to f32.
 //!
-//! Both readers are written here rather than taken from a crate. `ply-rs` (0.1.3, last
-//! released in 2020) parses every element into a key-value map (an allocation per vertex and
-//! per face) and reserves vectors from the header's element counts, so a header claiming 10^12
-//! faces asks for that memory before the first byte is read; `tobj` reads OBJ well but reports
-//! errors without their line, resolves indices after parsing without saying which `f` line was
-//! out of range, and reads coordinates as f32 (or, with a feature, every value as f64), while
-//! the scene format asks for the file's decimals in f64, rounded to f32 once after the transform.
-//! The readers here never reserve more than the bytes left in the file can hold, check the
-//! header's counts against the file's size before reading, and name the line (ASCII) or byte
-//! offset (binary) of every defect.
+//! Both readers are written here rather than taken from a crate; measured on the bunny cut into
+//! 1,061,786 triangles (scenes/models/make_large_mesh.py) on 2 cores, 2026-11-24:
+//!
+//! * `ply-rs` 0.1.3 reads the 21 MB binary PLY in 0.63 s (this reader, with the placement, in
+//!   0.23 – 0.25 s): it builds a key-value map per vertex and per face, cloning each property's
+//!   name into it. A truncated file is "failed to fill whole buffer", with no element or offset,
+//!   and nothing compares the header's counts with the file's size.
+//! * `tobj` 4 reads the same mesh as a 61 MB OBJ in 0.46 – 0.48 s (this reader 0.35 – 0.55 s), but
+//!   an index out of range (or 0) is `FaceVertexOutOfBounds` without the line, a face of two
+//!   vertices becomes a degenerate triangle instead of an error, and coordinates are parsed as
+//!   f32 (every value as f64 only with a feature), where the scene format asks for the file's
+//!   decimals in f64, rounded to f32 once after the transform.
+//!
+//! The readers here check the header's counts against the bytes that follow before reading,
+//! never reserve more than those bytes can hold, and name the face and the line (ASCII, OBJ) or
+//! byte offset (binary PLY) of every defect.
 
 use super::format::{MeshDesc, MeshTransform};
 use std::fmt;
