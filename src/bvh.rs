@@ -123,7 +123,7 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
         });
         return (nodes, Vec::new());
     }
-    flatten_root(&build_node(&mut info, 0, n, 0), &info, nodes)
+    flatten_root(&build_node(&mut info, 0, 0), &info, nodes)
 }
 
 /// Flattens the tree `root` into `nodes` and the padded `prims` that [`build`] returns.
@@ -224,16 +224,21 @@ fn flatten(
     index as u32
 }
 
-/// Builds the subtree over `info[start..end]`, reordering `info` so that every leaf's
-/// primitives are contiguous.
-fn build_node(info: &mut [PrimInfo], start: usize, end: usize, depth: usize) -> Built {
+/// Below this many primitives a subtree is built on the calling thread; above it the two
+/// children are built in parallel (`rayon::join`). The tree is the same either way: each
+/// subtree's build depends only on its own primitives.
+const PARALLEL_BUILD: usize = 4096;
+
+/// Builds the subtree over `info` (which starts at entry `start` of the whole array), reordering
+/// `info` so that every leaf's primitives are contiguous.
+fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
-    for p in &info[start..end] {
+    for p in info.iter() {
         bounds.grow(&p.bounds);
         cbounds.grow_point(p.centroid);
     }
-    let count = end - start;
+    let count = info.len();
     let leaf = Built::Leaf {
         bounds,
         offset: start as u32,
@@ -257,7 +262,7 @@ fn build_node(info: &mut [PrimInfo], start: usize, end: usize, depth: usize) -> 
         };
         let mut counts = [0usize; BINS];
         let mut boxes = [Aabb::EMPTY; BINS];
-        for p in &info[start..end] {
+        for p in info.iter() {
             let b = bucket_of(p.centroid);
             counts[b] += 1;
             boxes[b].grow(&p.bounds);
@@ -290,22 +295,31 @@ fn build_node(info: &mut [PrimInfo], start: usize, end: usize, depth: usize) -> 
                 return leaf;
             }
             let (lo, ext) = (cbounds.min[axis], extent[axis]);
-            let mid = partition(&mut info[start..end], |p| {
+            partition(info, |p| {
                 let b = ((p.centroid[axis] - lo) / ext * BINS as f32) as usize;
                 b.min(BINS - 1) < boundary
-            });
-            start + mid
+            })
         }
         None => {
             // All centroids coincide: no split separates anything, so halve by index.
             if count <= MAX_LEAF {
                 return leaf;
             }
-            start + count / 2
+            count / 2
         }
     };
-    let first = build_node(info, start, mid, depth + 1);
-    let second = build_node(info, mid, end, depth + 1);
+    let (left, right) = info.split_at_mut(mid);
+    let (first, second) = if count > PARALLEL_BUILD {
+        rayon::join(
+            || build_node(left, start, depth + 1),
+            || build_node(right, start + mid, depth + 1),
+        )
+    } else {
+        (
+            build_node(left, start, depth + 1),
+            build_node(right, start + mid, depth + 1),
+        )
+    };
     Built::Interior {
         bounds,
         children: Box::new([first, second]),

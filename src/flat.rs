@@ -182,6 +182,8 @@ pub struct FlatScene {
     /// The CPU's alone: the leaves' triangles four to a SIMD pack (`bvh::triangle_packs`),
     /// derived from `triangles` and `prims`; the shader reads those instead.
     pub packs: Vec<TrianglePack>,
+    /// Seconds the BVH build took (`bvh::build`, not the SIMD packs), for logs.
+    pub bvh_seconds: f64,
 }
 
 fn f3(v: [f64; 3]) -> [f32; 3] {
@@ -189,8 +191,8 @@ fn f3(v: [f64; 3]) -> [f32; 3] {
 }
 
 impl FlatScene {
-    /// Flattens a validated scene: materials in name order, triangles (boxes expanded after the
-    /// listed triangles), spheres, the emitter table, and the BVH over all primitives.
+    /// Flattens a validated scene: materials in name order, triangles (the listed triangles, then
+    /// the meshes' in `meshes` order, then the boxes' expanded), spheres, the emitter table, and the BVH over all primitives.
     pub fn build(scene: &Scene) -> FlatScene {
         let desc = &scene.desc;
         let names: Vec<&String> = desc.materials.keys().collect();
@@ -226,8 +228,8 @@ impl FlatScene {
             })
             .collect();
 
-        let mut triangles: Vec<Triangle> = Vec::new();
-        let mut push = |v: [[f64; 3]; 3], material: &str| {
+        let mut triangles: Vec<Triangle> = Vec::with_capacity(scene.triangle_count());
+        let push = |triangles: &mut Vec<Triangle>, v: [[f64; 3]; 3], material: &str| {
             triangles.push(Triangle::new(
                 f3(v[0]),
                 f3(v[1]),
@@ -236,11 +238,21 @@ impl FlatScene {
             ))
         };
         for t in &desc.triangles {
-            push(t.v, &t.material);
+            push(&mut triangles, t.v, &t.material);
+        }
+        // Meshes after the inline triangles, in file order: a mesh and the same triangles
+        // written inline after the others give the same list, so the same render.
+        for m in &scene.meshes {
+            let id = material_id(&m.material);
+            triangles.extend(
+                m.triangles
+                    .iter()
+                    .map(|v| Triangle::new(v[0], v[1], v[2], id)),
+            );
         }
         for b in &desc.boxes {
             for v in b.triangles() {
-                push(v, &b.material);
+                push(&mut triangles, v, &b.material);
             }
         }
         let spheres: Vec<Sphere> = desc
@@ -257,8 +269,11 @@ impl FlatScene {
 
         let mut spheres = spheres;
         let emitters = build_emitter_table(&mut triangles, &mut spheres, &materials);
+        let started = std::time::Instant::now();
         let (nodes, prims) = bvh::build(&triangles, &spheres);
+        let bvh_seconds = started.elapsed().as_secs_f64();
         FlatScene {
+            bvh_seconds,
             packs: bvh::triangle_packs(&triangles, &prims),
             triangles,
             spheres,

@@ -39,8 +39,10 @@ struct Cli {
 enum Command {
     /// Render a scene to EXR (linear) + PNG (sRGB) [default].
     Render(RenderArgs),
-    /// List the GPU adapters wgpu finds, with backend, driver and limits.
-    Info,
+    /// List the GPU adapters wgpu finds, with backend, driver and limits; with a scene, describe
+    /// the scene instead (triangles, bounds, BVH, memory per backend, build time) without
+    /// rendering.
+    Info(InfoArgs),
     /// Render a high-spp reference: an EXR and its variance EXR (default out/<name>_ref.exr).
     Reference(RenderArgs),
     /// Compare a render with a reference: means, ratio, RMSE, relMSE, z-scores.
@@ -166,6 +168,12 @@ impl RenderArgs {
 
 /// The scene rendered when none is given.
 const DEFAULT_SCENE: &str = "scenes/tncg15_room.json";
+
+#[derive(Args, Debug, Clone)]
+struct InfoArgs {
+    /// A scene file to describe (without it, the GPU adapters are listed).
+    scene: Option<PathBuf>,
+}
 
 #[derive(Args, Debug, Clone)]
 struct CompareArgs {
@@ -736,7 +744,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let args = match cli.command {
         Some(Command::Render(a)) => a,
-        Some(Command::Info) => return info(),
+        Some(Command::Info(InfoArgs { scene: None })) => return info(),
+        Some(Command::Info(InfoArgs { scene: Some(s) })) => return scene_info(&s),
         Some(Command::Compare(c)) => return compare(&c),
         Some(Command::Curve(c)) => {
             return match curve(&c) {
@@ -1056,6 +1065,10 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
                 None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
             };
+            if let Err(e) = gpu::render::check_scene_fits(&g.device.limits(), residency, &flat) {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
             let compile = std::time::Instant::now();
             let mut renderer = gpu::GpuRenderer::new(
                 &g.device,
@@ -1095,6 +1108,14 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             backend.name(),
             backend.device()
         );
+        eprintln!(
+            "hexray: BVH of {} primitives built in {:.3} s",
+            flat.triangles.len() + flat.spheres.len(),
+            flat.bvh_seconds
+        );
+        for line in mesh_lines(&scene) {
+            eprintln!("hexray: {line}");
+        }
     }
 
     // What every output of this render records: the settings, the scene, and the time of all
@@ -1372,6 +1393,123 @@ fn clock(secs: f64) -> String {
     } else {
         format!("{}:{:02}", s / 60, s % 60)
     }
+}
+
+/// One line per mesh: what was read and what was dropped.
+fn mesh_lines(scene: &Scene) -> Vec<String> {
+    scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let dropped = match m.first_dropped_face {
+                Some(face) => format!(
+                    "; dropped {} triangles of zero area in f32 (the first from face {face})",
+                    m.dropped
+                ),
+                None => String::new(),
+            };
+            format!(
+                "meshes[{i}] {}: {} vertices, {} faces, {} triangles{dropped}",
+                m.file,
+                m.vertices,
+                m.faces,
+                m.triangles.len()
+            )
+        })
+        .collect()
+}
+
+/// `hexray info SCENE`: loads and flattens the scene (exit 2 if it is bad) and prints its size,
+/// bounds, BVH and memory, without rendering.
+fn scene_info(path: &Path) -> ExitCode {
+    use std::io::Write;
+    let started = std::time::Instant::now();
+    let scene = match Scene::load(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let loaded = started.elapsed().as_secs_f64();
+    let flat = FlatScene::build(&scene);
+    let mut out = std::io::stdout().lock();
+    let mib = |b: usize| b as f64 / (1u64 << 20) as f64;
+    let (lo, hi) = flat.bounds();
+    let cpu = [
+        ("triangles", std::mem::size_of_val(&flat.triangles[..])),
+        ("packs", std::mem::size_of_val(&flat.packs[..])),
+        ("nodes", std::mem::size_of_val(&flat.nodes[..])),
+        ("prims", std::mem::size_of_val(&flat.prims[..])),
+        (
+            "other",
+            std::mem::size_of_val(&flat.spheres[..])
+                + std::mem::size_of_val(&flat.materials[..])
+                + std::mem::size_of_val(&flat.emitters[..]),
+        ),
+    ];
+    let gpu_arrays = gpu::render::scene_arrays(&flat);
+    let list = |arrays: &[(&str, usize)]| {
+        arrays
+            .iter()
+            .map(|(n, b)| format!("{n} {:.2}", mib(*b)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let (largest, largest_bytes) = gpu_arrays.iter().max_by_key(|a| a.1).copied().unwrap();
+    let _ = writeln!(out, "scene: {} ({})", path.display(), scene.desc.name);
+    let _ = writeln!(out, "scene_sha1: {}", scene.sha1);
+    let _ = writeln!(
+        out,
+        "triangles: {} ({} inline, {} from meshes, {} from boxes)",
+        flat.triangles.len(),
+        scene.desc.triangles.len(),
+        scene
+            .meshes
+            .iter()
+            .map(|m| m.triangles.len())
+            .sum::<usize>(),
+        12 * scene.desc.boxes.len()
+    );
+    for line in mesh_lines(&scene) {
+        let _ = writeln!(out, "  {line}");
+    }
+    let _ = writeln!(
+        out,
+        "spheres: {}, materials: {}, emitters: {}",
+        flat.spheres.len(),
+        flat.materials.len(),
+        flat.emitters.len()
+    );
+    let _ = writeln!(
+        out,
+        "bounds: min [{}, {}, {}], max [{}, {}, {}]",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    let _ = writeln!(
+        out,
+        "bvh: {} nodes (four-wide), depth {}, {} prims entries",
+        flat.nodes.len(),
+        hexray::bvh::depth(&flat.nodes),
+        flat.prims.len()
+    );
+    let _ = writeln!(
+        out,
+        "memory cpu: {:.2} MiB ({})",
+        mib(cpu.iter().map(|a| a.1).sum()),
+        list(&cpu)
+    );
+    let _ = writeln!(
+        out,
+        "memory gpu: {:.2} MiB ({}); largest binding {largest} {:.2} MiB",
+        mib(gpu_arrays.iter().map(|a| a.1).sum()),
+        list(&gpu_arrays),
+        mib(largest_bytes)
+    );
+    let _ = writeln!(out, "load_seconds: {loaded:.3}");
+    let _ = writeln!(out, "bvh_build_seconds: {:.3}", flat.bvh_seconds);
+    ExitCode::SUCCESS
 }
 
 /// Lists the adapters. Written with `writeln!` and its errors ignored, so that a reader that

@@ -25,6 +25,7 @@ mod layout;
 mod light_samples;
 mod light_tracing;
 mod merge;
+mod meshes;
 mod mis_weights;
 mod nothing_lost;
 mod photon_merging;

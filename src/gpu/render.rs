@@ -158,21 +158,85 @@ pub fn array_lengths(scene: &FlatScene) -> ArrayLengths {
     }
 }
 
+/// The scene arrays the kernel binds, by name, with their sizes in bytes as uploaded.
+pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
+    // An empty array is uploaded as one zeroed element (`upload`).
+    let at_least = |bytes: usize, one: usize| bytes.max(one);
+    [
+        (
+            "triangles",
+            at_least(std::mem::size_of_val(&scene.triangles[..]), 64),
+        ),
+        (
+            "spheres",
+            at_least(std::mem::size_of_val(&scene.spheres[..]), 32),
+        ),
+        (
+            "materials",
+            at_least(std::mem::size_of_val(&scene.materials[..]), 32),
+        ),
+        (
+            "emitters",
+            at_least(std::mem::size_of_val(&scene.emitters[..]), 16),
+        ),
+        (
+            "nodes",
+            at_least(std::mem::size_of_val(&scene.nodes[..]), 128),
+        ),
+        ("prims", at_least(16 * scene.prims.len().div_ceil(4), 16)),
+    ]
+}
+
+/// Whether every scene array fits one binding of `residency` on a device with `limits`; if not,
+/// a sentence for the user naming the array, its size, the limit and what works instead.
+pub fn check_scene_fits(
+    limits: &wgpu::Limits,
+    residency: Residency,
+    scene: &FlatScene,
+) -> Result<(), String> {
+    let (limit, what) = match residency {
+        Residency::Storage => (
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
+            "storage buffer binding",
+        ),
+        Residency::Uniform => (
+            limits
+                .max_uniform_buffer_binding_size
+                .min(limits.max_buffer_size),
+            "uniform buffer binding",
+        ),
+    };
+    for (name, bytes) in scene_arrays(scene) {
+        if bytes as u64 > limit {
+            let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+            let alternative = match residency {
+                Residency::Uniform => "--scene-residency storage, or --backend cpu",
+                Residency::Storage => "--backend cpu (no such limit)",
+            };
+            return Err(format!(
+                "the scene's {name} array is {:.1} MiB ({} triangles), more than this adapter's \
+                 largest {what} of {:.3} MiB (lavapipe's storage limit is 128 MiB, about 2 \
+                 million triangles); render it with {alternative}, or use fewer triangles",
+                mib(bytes as u64),
+                scene.triangles.len(),
+                mib(limit)
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl Residency {
     /// Uniform buffers on CPU adapters (lavapipe, llvmpipe) when every array fits the device's
     /// uniform binding limit; storage buffers otherwise. Real GPUs get storage buffers: their
     /// uniform (constant) caches serialise divergent indices, which BVH traversal has.
     pub fn preferred(info: &wgpu::AdapterInfo, limits: &wgpu::Limits, scene: &FlatScene) -> Self {
         let max = limits.max_uniform_buffer_binding_size as usize;
-        let sizes = [
-            std::mem::size_of_val(&scene.triangles[..]),
-            std::mem::size_of_val(&scene.spheres[..]),
-            std::mem::size_of_val(&scene.materials[..]),
-            std::mem::size_of_val(&scene.emitters[..]),
-            std::mem::size_of_val(&scene.nodes[..]),
-            16 * scene.prims.len().div_ceil(4),
-        ];
-        if info.device_type == wgpu::DeviceType::Cpu && sizes.iter().all(|&s| s <= max) {
+        if info.device_type == wgpu::DeviceType::Cpu
+            && scene_arrays(scene).iter().all(|&(_, s)| s <= max)
+        {
             Residency::Uniform
         } else {
             Residency::Storage
@@ -267,6 +331,8 @@ impl GpuRenderer {
         residency: Residency,
         method: Method,
     ) -> Result<GpuRenderer> {
+        // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
+        check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
         let (width, height) = (camera.width, camera.height);
         let pixels = (width as u64) * (height as u64);
         let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));

@@ -33,6 +33,10 @@ pub struct SceneDesc {
     /// Axis-aligned boxes, each expanded to 12 outward-facing triangles.
     #[serde(default)]
     pub boxes: Vec<BoxDesc>,
+    /// Triangle meshes read from PLY or OBJ files; their triangles join the scene's triangle
+    /// list after `triangles` and before the boxes' (see [`MeshDesc`]).
+    #[serde(default)]
+    pub meshes: Vec<MeshDesc>,
 }
 
 /// A pinhole camera; images are as wide as `--width` and as tall as `--height`, with square
@@ -135,6 +139,148 @@ pub struct BoxDesc {
     pub max: [f64; 3],
     /// The name of a material in `materials`.
     pub material: String,
+}
+
+/// A triangle mesh from a file, placed in the scene by a scale, a rotation and a translation.
+///
+/// Each vertex `v` of the file becomes `translate + R (scale * v)`, computed in f64 from the
+/// file's values (a PLY's float vertices are exact in f64; an OBJ's decimals are read as f64)
+/// and rounded to f32 once, as the numbers of inline `triangles` are. Without `rotate` the
+/// arithmetic is exactly `(v * s) + t` per coordinate in f64 (two roundings, in that order), so
+/// a mesh renders bit for bit like the same triangles written inline with those f64 values.
+/// With `rotate`, `R (s v)` is the sum `R[i][0] (s v)_x + R[i][1] (s v)_y + R[i][2] (s v)_z`
+/// from left to right, with R Rodrigues' matrix of the unit axis; for a multiple of 90 degrees
+/// cos and sin are taken exactly (0, 1 or -1), so quarter turns move vertices exactly.
+///
+/// Faces with more than three vertices are fanned, (v0, v_i, v_i+1) for i = 1 .. n - 2, as pbrt
+/// does; the winding of the file is kept, and the normal is the geometric one,
+/// (v1 - v0) x (v2 - v0) (flat shading; an emitter emits on that side). A triangle that has zero
+/// area once rounded to f32 is dropped and counted (`render` and `info` report the count and
+/// the first such face); every other defect of the file is an error that names it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    /// The mesh file, relative to the folder of the scene file: `.ply` (ASCII, binary little or
+    /// big endian; float or double vertices; faces as a list of any integer type) or `.obj`
+    /// (`v` and `f` lines; `f` accepts `i`, `i/t`, `i//n`, `i/t/n` and negative, relative,
+    /// indices; everything else is ignored).
+    pub file: String,
+    /// The name of a material in `materials`, for every triangle of the mesh.
+    pub material: String,
+    /// A uniform scale factor, or one per axis [sx, sy, sz]; each nonzero. Default 1.
+    #[serde(default)]
+    pub scale: Option<Scale>,
+    /// A rotation about an axis through the origin, applied after the scale.
+    #[serde(default)]
+    pub rotate: Option<RotateDesc>,
+    /// A translation [tx, ty, tz], applied last. Default [0, 0, 0].
+    #[serde(default)]
+    pub translate: Option<[f64; 3]>,
+}
+
+/// A mesh's scale: one number for all axes, or one per axis.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+impl Scale {
+    /// The factor per axis.
+    pub fn per_axis(self) -> [f64; 3] {
+        match self {
+            Scale::Uniform(s) => [s; 3],
+            Scale::PerAxis(v) => v,
+        }
+    }
+}
+
+/// A rotation by `degrees` about `axis`, counter-clockwise seen from the axis's tip (the
+/// right-hand rule).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotateDesc {
+    /// The axis; any nonzero length (it is normalised in f64).
+    pub axis: [f64; 3],
+    /// The angle in degrees.
+    pub degrees: f64,
+}
+
+impl MeshDesc {
+    /// The f64 transform of this mesh: `translate + R (scale * v)`. The arithmetic is documented
+    /// on [`MeshDesc`].
+    pub fn transform(&self) -> MeshTransform {
+        let scale = self.scale.map_or([1.0; 3], Scale::per_axis);
+        let rotation = self
+            .rotate
+            .as_ref()
+            .map(|r| rotation_matrix(r.axis, r.degrees));
+        MeshTransform {
+            scale,
+            rotation,
+            translate: self.translate.unwrap_or([0.0; 3]),
+        }
+    }
+}
+
+/// A mesh's placement in f64: scale, then rotation (when given), then translation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshTransform {
+    pub scale: [f64; 3],
+    pub rotation: Option<[[f64; 3]; 3]>,
+    pub translate: [f64; 3],
+}
+
+impl MeshTransform {
+    /// Where vertex `v` goes, in f64.
+    #[inline]
+    pub fn apply(&self, v: [f64; 3]) -> [f64; 3] {
+        let s = [
+            v[0] * self.scale[0],
+            v[1] * self.scale[1],
+            v[2] * self.scale[2],
+        ];
+        let r = match &self.rotation {
+            None => s,
+            Some(m) => [0, 1, 2].map(|i| m[i][0] * s[0] + m[i][1] * s[1] + m[i][2] * s[2]),
+        };
+        [
+            r[0] + self.translate[0],
+            r[1] + self.translate[1],
+            r[2] + self.translate[2],
+        ]
+    }
+}
+
+/// Cosine and sine of an angle in degrees, exact (0, 1 or -1) at multiples of 90.
+fn cos_sin_degrees(degrees: f64) -> (f64, f64) {
+    let quarter = degrees / 90.0;
+    if quarter == quarter.round() && quarter.abs() < 1e15 {
+        match (quarter as i64).rem_euclid(4) {
+            0 => (1.0, 0.0),
+            1 => (0.0, 1.0),
+            2 => (-1.0, 0.0),
+            _ => (0.0, -1.0),
+        }
+    } else {
+        let r = degrees.to_radians();
+        (r.cos(), r.sin())
+    }
+}
+
+/// Rodrigues' rotation matrix (row-major) for `degrees` about `axis` (normalised here; the
+/// caller has checked it is nonzero and finite).
+pub fn rotation_matrix(axis: [f64; 3], degrees: f64) -> [[f64; 3]; 3] {
+    let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    let [x, y, z] = axis.map(|a| a / len);
+    let (c, s) = cos_sin_degrees(degrees);
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
 }
 
 impl BoxDesc {

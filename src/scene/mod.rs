@@ -2,10 +2,15 @@
 
 pub mod format;
 pub mod locate;
+pub mod mesh;
 pub mod validate;
 
-pub use format::{BoxDesc, CameraDesc, MaterialDesc, SceneDesc, SphereDesc, TriangleDesc};
+pub use format::{
+    BoxDesc, CameraDesc, MaterialDesc, MeshDesc, MeshTransform, RotateDesc, Scale, SceneDesc,
+    SphereDesc, TriangleDesc,
+};
 pub use locate::JsonPath;
+pub use mesh::LoadedMesh;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -20,8 +25,12 @@ pub struct Scene {
     pub desc: SceneDesc,
     /// The file it was read from (for messages and metadata).
     pub path: PathBuf,
-    /// SHA-1 of the file's bytes, recorded in every output so renders can be matched to scenes.
+    /// SHA-1 of the scene file's bytes followed by each mesh file's bytes in `meshes` order
+    /// (for a scene without meshes, the SHA-1 of the scene file), recorded in every output so
+    /// renders can be matched to scenes.
     pub sha1: String,
+    /// The meshes of `desc.meshes`, read, placed and rounded to f32, in the same order.
+    pub meshes: Vec<LoadedMesh>,
 }
 
 /// Why a scene cannot be rendered, with the file, the place in it, and what to do.
@@ -163,11 +172,47 @@ impl Scene {
             message: issue.message,
             help: issue.help,
         })?;
+        let mut sha1 = sha1_smol::Sha1::from(text.as_bytes());
+        let folder = path.parent().unwrap_or(Path::new(""));
+        let mut meshes = Vec::with_capacity(desc.meshes.len());
+        for (i, m) in desc.meshes.iter().enumerate() {
+            let at = JsonPath::root().key("meshes").index(i).key("file");
+            let located = |message: String, help: String| SceneError {
+                file: path.to_path_buf(),
+                line_col: locate::locate(text, &at),
+                path: at.to_string(),
+                message,
+                help,
+            };
+            let mesh_path = folder.join(&m.file);
+            let bytes = std::fs::read(&mesh_path).map_err(|e| {
+                located(
+                    format!("cannot read the mesh file {}: {e}", mesh_path.display()),
+                    "the path is relative to the scene file's folder; check it".into(),
+                )
+            })?;
+            sha1.update(&bytes);
+            let loaded = mesh::parse(&m.file, &bytes)
+                .and_then(|data| {
+                    drop(bytes);
+                    mesh::place(m, mesh_path.clone(), &data, &m.transform())
+                })
+                .map_err(|e| located(format!("{}: {}", m.file, e.message), e.help))?;
+            meshes.push(loaded);
+        }
         Ok(Scene {
             desc,
             path: path.to_path_buf(),
-            sha1: sha1_smol::Sha1::from(text.as_bytes()).digest().to_string(),
+            sha1: sha1.digest().to_string(),
+            meshes,
         })
+    }
+
+    /// The number of triangles the scene renders: inline, from meshes and from boxes.
+    pub fn triangle_count(&self) -> usize {
+        self.desc.triangles.len()
+            + self.meshes.iter().map(|m| m.triangles.len()).sum::<usize>()
+            + 12 * self.desc.boxes.len()
     }
 }
 
@@ -193,6 +238,8 @@ fn parse_help(msg: &str) -> String {
         "material `type` must be one of diffuse, mirror, glass, emitter".into()
     } else if msg.starts_with("missing field") {
         "add the field; the scene format is documented in src/scene/format.rs".into()
+    } else if msg.contains("untagged enum Scale") {
+        "a mesh's scale is a number or [x, y, z]".into()
     } else if msg.contains("invalid type") || msg.contains("invalid length") {
         "numbers are JSON numbers and points are [x, y, z]".into()
     } else {

@@ -3,7 +3,7 @@
 //! Each check returns the path of the offending value and a sentence saying what to do; the
 //! caller turns the path into a line and column of the file.
 
-use super::format::{MaterialDesc, SceneDesc};
+use super::format::{MaterialDesc, Scale, SceneDesc};
 use super::locate::JsonPath;
 
 /// One problem: where, what, and what to do.
@@ -132,6 +132,16 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// Whether a triangle, as the renderer sees it (in f32), has no usable normal: the sine of the
+/// angle between its edges is below f32 resolution, so the normal would be noise (or zero, for
+/// repeated or collinear vertices). Inline triangles that are degenerate are errors; mesh
+/// triangles are dropped and counted.
+pub fn degenerate_f32(v: [[f32; 3]; 3]) -> bool {
+    let v = v.map(|p| p.map(f64::from));
+    let (e1, e2) = (sub(v[1], v[0]), sub(v[2], v[0]));
+    norm(cross(e1, e2)) <= 4.0 * f32::EPSILON as f64 * norm(e1) * norm(e2)
 }
 
 /// The material names closest to `name` (edit distance), for "did you mean".
@@ -276,11 +286,7 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         check_material_ref(&t.material, &p.key("material"), desc)?;
         // The renderer sees the vertices rounded to f32: a triangle far from the origin can
         // collapse there although its f64 vertices are distinct.
-        let v = t.v.map(|p| p.map(|x| x as f32 as f64));
-        let (e1, e2) = (sub(v[1], v[0]), sub(v[2], v[0]));
-        // Degenerate when the sine of the angle between the edges is below f32 resolution: the
-        // normal would then be noise (or zero, for repeated or collinear vertices).
-        if norm(cross(e1, e2)) <= 4.0 * f32::EPSILON as f64 * norm(e1) * norm(e2) {
+        if degenerate_f32(t.v.map(|p| p.map(|x| x as f32))) {
             return Err(issue(
                 p.key("v"),
                 "the triangle has zero area at f32 precision (repeated or collinear vertices, \
@@ -350,10 +356,62 @@ pub fn validate(desc: &SceneDesc) -> Result<(), Issue> {
         }
     }
 
+    // Meshes: a file named, a material that exists, a usable transform. The files themselves
+    // are read after validation (`Scene::from_json`).
+    let mp = root.key("meshes");
+    for (i, m) in desc.meshes.iter().enumerate() {
+        let p = mp.index(i);
+        if m.file.trim().is_empty() {
+            return Err(issue(
+                p.key("file"),
+                "the mesh file name is empty",
+                "give the path of a .ply or .obj file, relative to the scene file's folder",
+            ));
+        }
+        check_material_ref(&m.material, &p.key("material"), desc)?;
+        if let Some(scale) = m.scale {
+            let values: Vec<(JsonPath, f64)> = match scale {
+                Scale::Uniform(s) => vec![(p.key("scale"), s)],
+                Scale::PerAxis(v) => (0..3).map(|k| (p.key("scale").index(k), v[k])).collect(),
+            };
+            for (path, s) in values {
+                if !finite_f32(s) || s == 0.0 {
+                    return Err(issue(
+                        path,
+                        format!("scale {s} is not a finite nonzero number"),
+                        "a scale is a nonzero factor, e.g. 0.5 or [1, 1, 2]; 1 keeps the size",
+                    ));
+                }
+            }
+        }
+        if let Some(r) = &m.rotate {
+            let rp = p.key("rotate");
+            check_vec(&r.axis, &rp.key("axis"))?;
+            if norm(r.axis) == 0.0 {
+                return Err(issue(
+                    rp.key("axis"),
+                    "the rotation axis is zero",
+                    "give the axis as a nonzero direction, e.g. [0, 0, 1]",
+                ));
+            }
+            if !r.degrees.is_finite() {
+                return Err(issue(
+                    rp.key("degrees"),
+                    format!("{} degrees is not a finite angle", r.degrees),
+                    "give the angle in degrees, e.g. 90",
+                ));
+            }
+        }
+        if let Some(t) = &m.translate {
+            check_vec(t, &p.key("translate"))?;
+        }
+    }
+
     // At least one primitive that emits light, or the image is black by construction.
     if !desc.triangles.iter().any(|t| emits(&t.material))
         && !desc.boxes.iter().any(|b| emits(&b.material))
         && !desc.spheres.iter().any(|s| emits(&s.material))
+        && !desc.meshes.iter().any(|m| emits(&m.material))
     {
         return Err(issue(
             root.key("triangles"),
