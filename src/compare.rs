@@ -57,6 +57,51 @@ pub fn consistency_note(what: &str, path: &Path) -> Option<String> {
     })
 }
 
+/// The render metadata of an `.exr` (None for other files or files without it).
+fn exr_meta(path: &Path) -> Option<crate::output::Metadata> {
+    let exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    exr.then(|| crate::output::read_exr_metadata(path).ok())
+        .flatten()
+        .filter(|m| m.get("spp").is_some())
+}
+
+/// Refuses a variance file written by another render than its image (a stale NAME_var.exr
+/// left by an earlier render under the same name): both record the render's identity.
+pub fn check_variance_pair(image: &Path, variance: &Path) -> Result<()> {
+    let (Some(a), Some(b)) = (exr_meta(image), exr_meta(variance)) else {
+        return Ok(());
+    };
+    for key in ["spp", "seed", "scene_sha1", "method"] {
+        if a.get(key) != b.get(key) {
+            bail!(
+                "{} is not the variance of {} ({key} {} against {}): it is left from another \
+                 render; render again with --variance, or give --var/--ref-var",
+                variance.display(),
+                image.display(),
+                b.get(key).unwrap_or("missing"),
+                a.get(key).unwrap_or("missing")
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A note when the candidate and the reference are renders of different scene files.
+pub fn scene_note(candidate: &Path, reference: &Path) -> Option<String> {
+    let (a, b) = (exr_meta(candidate)?, exr_meta(reference)?);
+    let (sa, sb) = (a.get("scene_sha1")?, b.get("scene_sha1")?);
+    (sa != sb).then(|| {
+        format!(
+            "warning: the candidate and the reference are renders of different scene files \
+             ({} with sha1 {sa}, {} with sha1 {sb})",
+            a.get("scene").unwrap_or("?"),
+            b.get("scene").unwrap_or("?")
+        )
+    })
+}
+
 /// Reads an RGB image by extension: `.exr` (linear float) or `.npy` (float32/64, H x W x 3).
 pub fn read_image(path: &Path) -> Result<RgbImage> {
     match path.extension().and_then(|e| e.to_str()) {

@@ -191,6 +191,20 @@ struct CompareArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Exit with status 1 when the relMSE is above this (for CI).
+    #[arg(long, value_parser = parse_threshold)]
+    max_relmse: Option<f64>,
+    /// Exit with status 1 when the share of pixel-channels beyond 5 standard errors is above
+    /// this (for CI; needs both variances).
+    #[arg(long, value_parser = parse_threshold)]
+    max_px5: Option<f64>,
+}
+
+fn parse_threshold(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("expected a number >= 0, found {s:?}")),
+    }
 }
 
 /// NAME_var.EXT beside NAME.EXT, if that file exists.
@@ -212,7 +226,17 @@ fn compare(args: &CompareArgs) -> ExitCode {
         .clone()
         .or_else(|| variance_beside(&args.reference));
     let mut notes = Vec::new();
+    notes.extend(hexray::compare::scene_note(
+        &args.candidate,
+        &args.reference,
+    ));
     let result = (|| -> Result<_> {
+        if let Some(v) = &var {
+            hexray::compare::check_variance_pair(&args.candidate, v)?;
+        }
+        if let Some(v) = &ref_var {
+            hexray::compare::check_variance_pair(&args.reference, v)?;
+        }
         let mut c = read(&args.candidate)?;
         let r = read(&args.reference)?;
         let mut vars = match (&var, &ref_var) {
@@ -254,7 +278,41 @@ fn compare(args: &CompareArgs) -> ExitCode {
             } else {
                 print!("{}", cmp.text());
             }
-            ExitCode::SUCCESS
+            // --max-relmse / --max-px5: the exit status a CI job can act on.
+            let mut failed = false;
+            if let Some(max) = args.max_relmse {
+                if !(cmp.relmse <= max) {
+                    eprintln!(
+                        "compare: relMSE {:e} is above --max-relmse {max:e}",
+                        cmp.relmse
+                    );
+                    failed = true;
+                }
+            }
+            if let Some(max) = args.max_px5 {
+                match cmp.beyond_5_se {
+                    Some(share) if share <= max => {}
+                    Some(share) => {
+                        eprintln!(
+                            "compare: {share:e} of pixel-channels beyond 5 s.e., above --max-px5 \
+                             {max:e}"
+                        );
+                        failed = true;
+                    }
+                    None => {
+                        eprintln!(
+                            "compare: --max-px5 needs both variances (NAME_var.exr beside each \
+                             image, or --var and --ref-var)"
+                        );
+                        return ExitCode::from(EXIT_BAD_INPUT);
+                    }
+                }
+            }
+            if failed {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
         }
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -288,17 +346,6 @@ struct CurveArgs {
     light_samples: Vec<u32>,
     #[arg(long, default_value_t = 1)]
     seed: u32,
-    /// Continue the render NAME.exr (from its film, NAME.film, written beside every render) to
-    /// --spp samples in total, or for --time more seconds: same scene (its SHA-1 is checked),
-    /// seed, method, size and radius. The new samples continue the random streams, so on the
-    /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
-    /// unless --out says otherwise.
-    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples"])]
-    resume: Option<PathBuf>,
-    /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
-    /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
-    checkpoint: Option<f64>,
     /// CPU threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     threads: Option<u32>,
@@ -587,17 +634,6 @@ struct BenchArgs {
     /// Shadow rays per diffuse vertex (path tracing).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
     light_samples: u32,
-    /// Continue the render NAME.exr (from its film, NAME.film, written beside every render) to
-    /// --spp samples in total, or for --time more seconds: same scene (its SHA-1 is checked),
-    /// seed, method, size and radius. The new samples continue the random streams, so on the
-    /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
-    /// unless --out says otherwise.
-    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples"])]
-    resume: Option<PathBuf>,
-    /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
-    /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
-    checkpoint: Option<f64>,
     /// CPU threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     threads: Option<u32>,

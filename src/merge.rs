@@ -111,6 +111,32 @@ pub fn load_part(path: &Path) -> Result<Part, MergeError> {
             path.display()
         )));
     }
+    if spp > u64::from(u32::MAX) {
+        return Err(MergeError(format!(
+            "{}: spp {spp} is more than a render takes (at most {}); the file's metadata is \
+             damaged",
+            path.display(),
+            u32::MAX
+        )));
+    }
+    // The variance file must be the one written with this image (a stale NAME_var.exr from
+    // an earlier render under the same name would pair another render's variance with it).
+    let var_meta = crate::output::read_exr_metadata(&var_path)
+        .map_err(|e| MergeError(format!("{}: {e:#}", var_path.display())))?;
+    for key in ["spp", "seed", "scene_sha1", "method"] {
+        if var_meta.get(key) != meta.get(key) {
+            return Err(MergeError(format!(
+                "{}: its variance file {} is from another render ({key} {} against {}); \
+                 render the part again with --variance",
+                path.display(),
+                var_path.display(),
+                var_meta.get(key).unwrap_or("missing"),
+                meta.get(key).unwrap_or("missing")
+            )));
+        }
+    }
+    check_pixels(path, &mean, false)?;
+    check_pixels(&var_path, &var, true)?;
     Ok(Part {
         path: path.to_path_buf(),
         mean,
@@ -119,6 +145,28 @@ pub fn load_part(path: &Path) -> Result<Part, MergeError> {
         spp,
         seed,
     })
+}
+
+/// Refuses an image with a pixel that is not finite, or (a variance) negative, by file and
+/// pixel: either would poison the merged sums silently.
+fn check_pixels(path: &Path, image: &RgbImage, variance: bool) -> Result<(), MergeError> {
+    let bad = |v: &f32| !v.is_finite() || (variance && *v < 0.0);
+    if let Some(i) = image.pixels.iter().position(|p| p.iter().any(bad)) {
+        let what = if variance {
+            "a negative or non-finite variance"
+        } else {
+            "a non-finite value"
+        };
+        return Err(MergeError(format!(
+            "{}: pixel ({}, {}) holds {what} {:?}; hexray never writes one, so the file is \
+             damaged",
+            path.display(),
+            i % image.width,
+            i / image.width,
+            image.pixels[i]
+        )));
+    }
+    Ok(())
 }
 
 /// The merged render.
@@ -204,7 +252,12 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
                 sum_sq[i][c] += n * (n - 1.0) * v + n * m * m;
             }
         }
-        total += p.spp;
+        total = total.checked_add(p.spp).ok_or_else(|| {
+            MergeError(format!(
+                "{}: the parts' samples add up to more than 2^64",
+                p.path.display()
+            ))
+        })?;
     }
     let n = total as f64;
     let mut mean = Vec::with_capacity(pixels);

@@ -241,8 +241,48 @@ fn metadata_of(
     meta
 }
 
+/// The largest ratio of decoded to stored bytes an EXR compression reaches: deflate (ZIP,
+/// ZIPS) stores at best 1032 bytes in one; RLE, PIZ, PXR24 and B44 far fewer.
+const MAX_EXR_EXPANSION: u64 = 1100;
+
+/// Checks an EXR's header against the file's size before any pixel memory is allocated: the
+/// chunk offset table (8 bytes per chunk) must fit in the file, and the decoded pixels must not
+/// exceed what any compression could have stored in it. A 1.3 kB file whose header claims
+/// 100000 x 100000 is refused here instead of asking for 120 GB.
+pub fn check_exr_size(path: &Path) -> Result<()> {
+    let file_len = std::fs::metadata(path)
+        .with_context(|| format!("reading {}", path.display()))?
+        .len();
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .with_context(|| format!("reading {}", path.display()))?;
+    for header in meta.headers.iter() {
+        let (w, h) = (
+            header.layer_size.width() as u64,
+            header.layer_size.height() as u64,
+        );
+        let sample_bytes: u64 = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u64)
+            .sum();
+        let decoded = w.saturating_mul(h).saturating_mul(sample_bytes.max(1));
+        let table = (header.chunk_count as u64).saturating_mul(8);
+        if table > file_len || decoded > file_len.saturating_mul(MAX_EXR_EXPANSION) {
+            bail!(
+                "{}: the header claims {w}x{h} pixels ({decoded} bytes decoded, {} chunks), more \
+                 than a file of {file_len} bytes can hold; the file is damaged or crafted",
+                path.display(),
+                header.chunk_count
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Reads the first RGB(A) layer of an EXR and its `hexray:` metadata.
 pub fn read_exr(path: &Path) -> Result<(RgbImage, Metadata)> {
+    check_exr_size(path)?;
     let image = read_first_rgba_layer_from_file(
         path,
         |res, _| RgbImage {
@@ -280,6 +320,20 @@ pub fn read_npy_rgb(path: &Path) -> Result<RgbImage> {
         );
     }
     let (height, width) = (shape[0] as usize, shape[1] as usize);
+    // The shape against the bytes that hold it, before allocating for it.
+    let item = if matches!(npy.dtype(), npyz::DType::Plain(t) if t.size_field() == 8) {
+        8
+    } else {
+        4
+    };
+    let needed = shape.iter().try_fold(item as u64, |a, &d| a.checked_mul(d));
+    if needed.is_none_or(|n| n > bytes.len() as u64) {
+        bail!(
+            "{}: shape {shape:?} needs more bytes than the file's {}; the file is damaged",
+            path.display(),
+            bytes.len()
+        );
+    }
     let data: Vec<f32> = match npy.dtype() {
         npyz::DType::Plain(t) if t.size_field() == 8 => npy
             .into_vec::<f64>()?

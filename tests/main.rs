@@ -12,6 +12,7 @@ mod chi_square;
 mod cli;
 mod common;
 mod compare;
+mod crafted_files;
 mod curve;
 mod determinism;
 mod direct_light;
