@@ -281,7 +281,8 @@ fn compare(args: &CompareArgs) -> ExitCode {
             // --max-relmse / --max-px5: the exit status a CI job can act on.
             let mut failed = false;
             if let Some(max) = args.max_relmse {
-                if !(cmp.relmse <= max) {
+                // NaN counts as above.
+                if cmp.relmse.is_nan() || cmp.relmse > max {
                     eprintln!(
                         "compare: relMSE {:e} is above --max-relmse {max:e}",
                         cmp.relmse
