@@ -1102,7 +1102,16 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
                 None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
             };
-            if let Err(e) = gpu::render::check_scene_fits(&g.device.limits(), residency, &flat) {
+            if let Err(e) = gpu::render::check_scene_fits(&g.device.limits(), residency, &flat)
+                .and_then(|_| {
+                    gpu::render::check_image_fits(
+                        &g.device.limits(),
+                        method,
+                        args.width,
+                        args.height,
+                    )
+                })
+            {
                 eprintln!("error: --backend gpu: {e}");
                 return Ok(ExitCode::from(EXIT_BAD_INPUT));
             }

@@ -351,3 +351,35 @@ fn a_scene_path_beyond_latin_1_is_recorded_in_the_exr() {
     let (_, meta) = read_exr(&out).unwrap();
     assert_eq!(meta.get("scene"), Some(&*scene.to_string_lossy()));
 }
+
+/// The GPU backend does not split its film yet: an image beyond the adapter's largest storage
+/// binding (lavapipe: 128 MiB, 2049x2048 for path tracing) is refused with a plain sentence and
+/// exit 2 before any work, never a raw wgpu validation error.
+#[test]
+fn a_gpu_image_beyond_the_binding_limit_is_refused_plainly() {
+    if crate::common::gpu().is_none() {
+        return;
+    }
+    let dir = temp_dir("gpu-size");
+    let exr = dir.join("big.exr");
+    let o = hexray()
+        .args([
+            "render",
+            "scenes/cornell_box.json",
+            "--backend",
+            "gpu",
+            "--method",
+            "path",
+        ])
+        .args(["--width", "3840", "--height", "2160", "--spp", "1", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("film buffer, more than this adapter binds") && !err.contains("wgpu"),
+        "{err}"
+    );
+    assert!(!exr.exists());
+}

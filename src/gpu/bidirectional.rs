@@ -101,7 +101,7 @@ fn image_cells_word(pixels: u64) -> u64 {
 fn vertex_counter_word(pixels: u64) -> u64 {
     (pixels + MAX_PASS_SPP as u64) * CELL_WORDS
 }
-fn tally_words(pixels: u64) -> u64 {
+pub(crate) fn tally_words(pixels: u64) -> u64 {
     vertex_counter_word(pixels) + 1 + pixels
 }
 

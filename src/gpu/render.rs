@@ -187,6 +187,45 @@ pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
     ]
 }
 
+/// Whether the per-pixel buffers of a `width` x `height` render with `method` fit this device's
+/// largest storage binding; if not, a sentence for the user with the largest size that does.
+/// (The film buffers are not yet split into bands: above lavapipe's 128 MiB binding, about
+/// 2048 x 2048 for path tracing, the GPU backend refuses and the CPU backend renders.)
+pub fn check_image_fits(
+    limits: &wgpu::Limits,
+    method: Method,
+    width: u32,
+    height: u32,
+) -> Result<(), String> {
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let per_pixel = |pixels: u64| {
+        let mut largest = (pixels * std::mem::size_of::<PixelSums>() as u64).max(16 * pixels);
+        if method.splats() {
+            largest = largest.max(4 * super::bidirectional::tally_words(pixels));
+        }
+        largest
+    };
+    let pixels = width as u64 * height as u64;
+    if per_pixel(pixels) <= limit {
+        return Ok(());
+    }
+    // The largest square image that fits, for the message.
+    let mut side = 1u64;
+    while per_pixel((side + 1) * (side + 1)) <= limit {
+        side += 1;
+    }
+    Err(format!(
+        "a {width}x{height} render with --method {method} needs a {:.0} MiB film buffer, more \
+         than this adapter binds ({:.0} MiB; at most about {side}x{side} pixels); the GPU \
+         backend does not split the film yet: render it with --backend cpu, or at a smaller \
+         size",
+        per_pixel(pixels) as f64 / (1u64 << 20) as f64,
+        limit as f64 / (1u64 << 20) as f64
+    ))
+}
+
 /// Whether every scene array fits one binding of `residency` on a device with `limits`; if not,
 /// a sentence for the user naming the array, its size, the limit and what works instead.
 pub fn check_scene_fits(
