@@ -1,0 +1,123 @@
+//! `hexray bench`: camera paths/s per scene and backend.
+
+use super::*;
+use anyhow::Result;
+use clap::Args;
+use hexray::gpu;
+use hexray::method::Method;
+use hexray::output;
+use hexray::scene::Scene;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args, Debug, Clone)]
+pub(crate) struct BenchArgs {
+    /// Scene files (default: the three reference scenes).
+    #[arg(default_values_t = [
+        "scenes/tncg15_room.json".to_string(),
+        "scenes/cornell_box.json".to_string(),
+        "scenes/glass_room.json".to_string(),
+    ])]
+    pub(crate) scenes: Vec<String>,
+    /// Backends, comma-separated: cpu, gpu. A gpu row needs an adapter.
+    #[arg(long, value_delimiter = ',', default_values_t = [BenchBackend::Cpu, BenchBackend::Gpu])]
+    pub(crate) backend: Vec<BenchBackend>,
+    /// Use the first GPU adapter whose name contains this.
+    #[arg(long)]
+    pub(crate) adapter: Option<String>,
+    /// Samples per pixel of the timed render.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) spp: u32,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub(crate) width: u32,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub(crate) height: u32,
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u32,
+    /// Methods, comma-separated (path, light, bdpt): a row for each on every scene and backend.
+    #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
+    pub(crate) method: Vec<Method>,
+    /// Shadow rays per diffuse vertex (path tracing).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    pub(crate) light_samples: u32,
+    /// CPU threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub(crate) threads: Option<u32>,
+    /// Where the JSON report goes.
+    #[arg(long, default_value = "out/bench.json")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum BenchBackend {
+    Cpu,
+    Gpu,
+}
+
+impl std::fmt::Display for BenchBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BenchBackend::Cpu => "cpu",
+            BenchBackend::Gpu => "gpu",
+        })
+    }
+}
+
+pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
+    use hexray::bench::{self, Which};
+    for s in &args.scenes {
+        if let Err(e) = Scene::load(std::path::Path::new(s)) {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
+    let backends: Vec<Which> = args
+        .backend
+        .iter()
+        .map(|b| match b {
+            BenchBackend::Cpu => Which::Cpu,
+            BenchBackend::Gpu => Which::Gpu,
+        })
+        .collect();
+    let gpu = if backends.contains(&Which::Gpu) {
+        match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        }
+    } else {
+        None
+    };
+    let config = bench::Config {
+        scenes: args.scenes.iter().map(PathBuf::from).collect(),
+        backends,
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        seed: args.seed,
+        methods: args.method.clone(),
+        light_samples: args.light_samples,
+        threads: args.threads.map_or_else(
+            || std::thread::available_parallelism().map_or(1, |n| n.get()),
+            |t| t as usize,
+        ),
+    };
+    let report = bench::run(&config, gpu.as_ref(), |row| {
+        eprintln!(
+            "{} with {} on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
+            row.scene,
+            row.method,
+            row.device,
+            row.camera_paths_per_second / 1e6,
+            row.seconds,
+            row.spp,
+            row.compile_seconds + row.warmup_seconds
+        );
+    })?;
+    print!("{}", bench::table(&report));
+    output::write_text(&args.out, &serde_json::to_string_pretty(&report)?)?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,775 @@
+//! `hexray render` and `hexray reference`: the options, the checks before any work, the progressive
+//! render with its progress and checkpoints, resuming, and the outputs.
+
+use super::*;
+use anyhow::{Context, Result};
+use clap::Args;
+use hexray::camera::Camera;
+use hexray::film::Film;
+use hexray::film_file::{self, FilmIdentity};
+use hexray::flat::FlatScene;
+use hexray::gpu;
+use hexray::interrupt::StopRequest;
+use hexray::method::Method;
+use hexray::output::{self, Metadata, RgbImage};
+use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
+use hexray::scene::Scene;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Args, Debug, Clone)]
+pub(crate) struct RenderArgs {
+    /// Scene file (JSON) [default: scenes/tncg15_room.json; with --resume, the resumed
+    /// render's scene].
+    pub(crate) scene: Option<PathBuf>,
+    /// Which renderer to use.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub(crate) backend: BackendChoice,
+    /// Use the first GPU adapter whose name contains this (see `hexray info`).
+    #[arg(long)]
+    pub(crate) adapter: Option<String>,
+    /// Compile the kernel with naga's runtime checks (bounds checks, loop bounding). Off by
+    /// default: see docs/gpu.md for the measurement behind that choice.
+    #[arg(long)]
+    pub(crate) shader_checks: bool,
+    /// Where the GPU keeps the scene arrays (default: uniform buffers on CPU adapters when the
+    /// scene fits, else storage buffers).
+    #[arg(long, value_enum)]
+    pub(crate) scene_residency: Option<ResidencyChoice>,
+    /// Light-transport method. `light` sees nothing through mirrors or glass (those surfaces
+    /// stay black); `light`, `bdpt`, `sppm` and `vcm` take one iteration (a light subpath and a
+    /// camera subpath per pixel) per sample. `sppm` and `vcm` merge photons: consistent, not
+    /// unbiased (the bias shrinks with the radius over iterations; the standard error does not
+    /// cover it). Default: vcm for `render` (the lowest error at equal time on the reference
+    /// scenes, docs/methods.md), path for `reference` (unbiased).
+    #[arg(long, value_enum)]
+    pub(crate) method: Option<Method>,
+    /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.003 x the scene's
+    /// bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm with 0 is
+    /// bdpt.
+    #[arg(long, value_parser = parse_radius)]
+    pub(crate) radius: Option<f32>,
+    /// Radius reduction alpha of sppm and vcm, in (0, 1] (default 0.75; 1 keeps the radius).
+    #[arg(long, value_parser = parse_alpha)]
+    pub(crate) alpha: Option<f32>,
+    /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
+    /// (path tracing only).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    pub(crate) light_samples: u32,
+    /// Samples per pixel (iterations for all methods but path). Without --time the default is
+    /// 64 for path and 8 for the others (about as long at 512x512); with --time, no sample
+    /// limit.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) spp: Option<u32>,
+    /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
+    #[arg(long, value_parser = parse_seconds)]
+    pub(crate) time: Option<f64>,
+    /// Seed of the random streams; renders with different seeds are independent.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u32,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub(crate) width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub(crate) height: u32,
+    /// Output EXR path; NAME.png (and NAME_var.exr with --variance) are written beside it.
+    /// Default: out/<scene name>.exr.
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// Also write the per-pixel variance of the mean as NAME_var.exr.
+    #[arg(long)]
+    pub(crate) variance: bool,
+    /// Exposure of the PNG in stops (the EXR is always linear and unscaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
+    pub(crate) exposure: f32,
+    /// Continue the render NAME.exr (from its film, NAME.film, written beside every render) to
+    /// --spp samples in total, or for --time more seconds: same scene (its SHA-1 is checked),
+    /// seed, method, size and radius. The new samples continue the random streams, so on the
+    /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
+    /// unless --out says otherwise.
+    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples"])]
+    pub(crate) resume: Option<PathBuf>,
+    /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
+    /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub(crate) checkpoint: Option<f64>,
+    /// CPU threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub(crate) threads: Option<u32>,
+    /// No progress bar and no summary.
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+impl RenderArgs {
+    /// The scene file: as given, else the default scene.
+    pub(crate) fn scene_path(&self) -> PathBuf {
+        self.scene
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_SCENE))
+    }
+}
+
+/// The scene rendered when none is given.
+pub(crate) const DEFAULT_SCENE: &str = "scenes/tncg15_room.json";
+
+/// The merge radius a command line asks for, or an error for the user (exit 2): `--radius` and
+/// `--alpha` only with a merging method, and sppm needs a radius above 0.
+pub(crate) fn merge_radius_of(
+    method: Method,
+    radius: Option<f32>,
+    alpha: Option<f32>,
+    flat: &FlatScene,
+) -> std::result::Result<hexray::merging::MergeRadius, String> {
+    if !method.merges() && (radius.is_some() || alpha.is_some()) {
+        return Err(format!(
+            "--radius and --alpha are for --method sppm and vcm, not {method}"
+        ));
+    }
+    let mut r = hexray::merging::MergeRadius::default_for(flat);
+    if let Some(v) = radius {
+        r.initial = v;
+    }
+    if let Some(a) = alpha {
+        r.alpha = a;
+    }
+    if method == Method::Sppm && r.initial <= 0.0 {
+        return Err("--method sppm needs a merge radius above 0".into());
+    }
+    Ok(r)
+}
+
+/// Exit status when more than [`DROPPED_SHARE_LIMIT`] of the samples were dropped (not finite):
+/// the image is written, but it is missing light.
+pub(crate) const EXIT_DROPPED: u8 = 3;
+
+/// The share of dropped samples above which a render exits with [`EXIT_DROPPED`].
+pub(crate) const DROPPED_SHARE_LIMIT: f64 = 0.01;
+
+/// Reads the film of `--resume NAME.exr` and takes the settings it was made with into `args`;
+/// refuses a film whose EXR is from another render.
+pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, FilmIdentity)> {
+    let path = film_file::film_path(exr);
+    let (film, id) = film_file::read(&path)
+        .with_context(|| format!("no film to resume beside {}", exr.display()))?;
+    if exr.exists() {
+        let meta = output::read_exr_metadata(exr)?;
+        let ours = [
+            ("spp", id.spp.to_string()),
+            ("seed", id.seed.to_string()),
+            ("method", id.method.clone()),
+            ("scene_sha1", id.scene_sha1.clone()),
+        ];
+        for (key, value) in ours {
+            if meta.get(key) != Some(value.as_str()) {
+                anyhow::bail!(
+                    "{} and {} come from different renders ({key} {} against {value}); \
+                     resume from the pair written together",
+                    exr.display(),
+                    path.display(),
+                    meta.get(key).unwrap_or("missing"),
+                );
+            }
+        }
+    }
+    args.seed = id.seed;
+    args.width = id.width;
+    args.height = id.height;
+    args.method = Some(
+        Method::from_str(&id.method, true)
+            .map_err(|e| anyhow::anyhow!("{}: method {}: {e}", path.display(), id.method))?,
+    );
+    args.light_samples = id.light_samples;
+    args.radius = id.merge_radius;
+    args.alpha = id.merge_alpha;
+    args.scene.get_or_insert_with(|| PathBuf::from(&id.scene));
+    args.out.get_or_insert_with(|| exr.to_path_buf());
+    Ok((film, id))
+}
+
+pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
+    // First, so that a stop during the set-up (a GPU kernel's compilation takes seconds) ends
+    // the render before its first sample, writing nothing.
+    let stop = StopRequest::install().context("installing the signal handlers")?;
+    // --resume: the film so far, and the settings it was made with.
+    let mut args = args.clone();
+    let resumed = match args.resume.clone() {
+        None => None,
+        Some(exr) => match resume_from(&exr, &mut args) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                eprintln!("error: --resume {}: {e:#}", exr.display());
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        },
+    };
+    let args = &args;
+    let method = args.method.unwrap_or(Method::DEFAULT);
+    let scene_path = args.scene_path();
+    // Everything that can be wrong with the input is found here, before any output exists.
+    let scene = match Scene::load(&scene_path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    if method.splats() {
+        if let Err(issue) =
+            hexray::scene::validate::check_splat_range(&scene.desc, &method.to_string())
+        {
+            eprintln!("error: {}", scene.error_at(issue));
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
+    let extent = hexray::scene::validate::extent(&scene.desc);
+    if extent > hexray::scene::validate::TESTED_COORDINATE {
+        eprintln!(
+            "hexray: warning: {} reaches {extent:e} from the origin; the renderer's 32-bit \
+             precision is tested to {:e} (docs/stability.md)",
+            scene_path.display(),
+            hexray::scene::validate::TESTED_COORDINATE
+        );
+    }
+    let before = resumed.as_ref().map_or(0, |(f, _)| f.spp());
+    if let Some((_, id)) = &resumed {
+        if id.scene_sha1 != scene.sha1 {
+            eprintln!(
+                "error: --resume: {} has changed since the render (SHA-1 {} then, {} now); \
+                 a resumed render must continue the same scene",
+                scene_path.display(),
+                id.scene_sha1,
+                scene.sha1
+            );
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+        match (args.spp, args.time) {
+            (None, None) => {
+                eprintln!(
+                    "error: --resume needs --spp (the total to reach; it has {before}) or --time \
+                     (seconds more)"
+                );
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+            (Some(n), _) if u64::from(n) < before => {
+                eprintln!(
+                    "error: --resume: the render already has {before} samples per pixel, more \
+                     than --spp {n} (the total, not the samples to add)"
+                );
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+            (Some(n), _) if u64::from(n) == before => {
+                eprintln!(
+                    "hexray: the render already has {before} samples per pixel; nothing to do"
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
+            _ => {}
+        }
+    }
+    // The default output is named after the scene file (its stem: no folder in it), not the
+    // scene's `name`, so that a copied scene does not overwrite the original's render and no
+    // name can lead out of out/.
+    let out = args.out.clone().unwrap_or_else(|| {
+        let stem = scene_path
+            .file_stem()
+            .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from("out").join(format!("{stem}.exr"))
+    });
+    if out
+        .extension()
+        .is_none_or(|e| !e.eq_ignore_ascii_case("exr"))
+    {
+        eprintln!(
+            "error: --out {}: the output must be an .exr path (the PNG is written beside it)",
+            out.display()
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    if args.light_samples > 1 && method != Method::Path {
+        let given = if args.method.is_none() {
+            " (the default method; add --method path)"
+        } else {
+            ""
+        };
+        eprintln!(
+            "error: --light-samples {} is for --method path; {method}{given} takes one light \
+             sample per vertex",
+            args.light_samples
+        );
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    // --spp is the total: a resumed render adds what is missing.
+    let budget = Budget {
+        spp: match (args.spp, args.time) {
+            (Some(n), _) => Some(n - before as u32),
+            (None, None) => Some(method.default_samples()),
+            (None, Some(_)) => None,
+        },
+        seconds: args.time,
+    };
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        |t| t as usize,
+    );
+    // The host memory the render will hold, against what the machine has free, before any of
+    // it is allocated.
+    let pixels = u64::from(args.width) * u64::from(args.height);
+    let needed = pixels * hexray::render::host_bytes_per_pixel(method);
+    if let Some(free) = hexray::render::available_memory() {
+        if needed > free {
+            eprintln!(
+                "error: a {}x{} render with {method} needs about {:.1} GiB of memory and {:.1} GiB \
+                 is available; render a smaller image (--width, --height)",
+                args.width,
+                args.height,
+                needed as f64 / (1u64 << 30) as f64,
+                free as f64 / (1u64 << 30) as f64
+            );
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    }
+
+    let flat = FlatScene::build(&scene);
+    let camera = Camera::new(&scene.desc.camera, args.width, args.height);
+    let radius = match merge_radius_of(method, args.radius, args.alpha, &flat) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    // The last check before any work: the outputs can be written (not found after the render).
+    if let Err(e) = output::check_writable(&out, args.variance) {
+        eprintln!("error: --out {}: {e:#}", out.display());
+        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    let gpu = match args.backend {
+        BackendChoice::Cpu => None,
+        BackendChoice::Gpu => match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        },
+        // A software adapter (lavapipe) runs the kernel on the very cores the CPU backend uses,
+        // about 5x slower (docs/gpu.md), so `auto` takes it only when asked for by --adapter.
+        BackendChoice::Auto => match gpu::acquire(args.adapter.as_deref()) {
+            Ok(g) if g.info.device_type == wgpu::DeviceType::Cpu && args.adapter.is_none() => {
+                if !args.quiet {
+                    eprintln!(
+                        "hexray: backend cpu (auto): the only GPU adapter is {}, a software \
+                         rasteriser on these same cores and slower than the CPU backend \
+                         (--backend gpu uses it anyway)",
+                        g.info.name
+                    );
+                }
+                None
+            }
+            Ok(g) => {
+                if !args.quiet {
+                    eprintln!(
+                        "hexray: backend gpu (auto): found {}",
+                        gpu::context::describe(&g.info)
+                    );
+                }
+                Some(g)
+            }
+            Err(e) => {
+                if !args.quiet {
+                    eprintln!("hexray: backend cpu (auto): {e}");
+                }
+                None
+            }
+        },
+    };
+    let mut backend: Box<dyn Backend + '_> = match &gpu {
+        None => {
+            let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
+            cpu.light_samples = args.light_samples;
+            cpu.method = method;
+            cpu.radius = Some(radius);
+            Box::new(cpu)
+        }
+        Some(g) => {
+            let checks = if args.shader_checks {
+                gpu::Checks::Checked
+            } else {
+                gpu::Checks::Unchecked
+            };
+            let residency = match args.scene_residency {
+                Some(ResidencyChoice::Storage) => gpu::Residency::Storage,
+                Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
+                None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
+            };
+            if let Err(e) = gpu::render::check_scene_fits(&g.device.limits(), residency, &flat)
+                .and_then(|_| {
+                    gpu::render::check_image_fits(
+                        &g.device.limits(),
+                        method,
+                        args.width,
+                        args.height,
+                    )
+                })
+            {
+                eprintln!("error: --backend gpu: {e}");
+                return Ok(ExitCode::from(EXIT_BAD_INPUT));
+            }
+            let compile = std::time::Instant::now();
+            let mut renderer = gpu::GpuRenderer::new(
+                &g.device,
+                &g.queue,
+                &flat,
+                camera,
+                args.seed,
+                hexray::cpu::Faults::NONE,
+                checks,
+                residency,
+                method,
+            )?;
+            renderer.set_light_samples(args.light_samples);
+            renderer.set_merge_radius(radius);
+            if !args.quiet {
+                eprintln!(
+                    "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
+                    compile.elapsed().as_secs_f64()
+                );
+            }
+            Box::new(gpu::GpuBackend {
+                renderer,
+                adapter: gpu::context::describe(&g.info),
+            })
+        }
+    };
+    if !args.quiet {
+        eprintln!(
+            "hexray: {} ({} triangles, {} spheres, {} emitters, {} BVH nodes) at {}x{} on {} ({})",
+            scene_path.display(),
+            flat.triangles.len(),
+            flat.spheres.len(),
+            flat.emitters.len(),
+            flat.nodes.len(),
+            args.width,
+            args.height,
+            backend.name(),
+            backend.device()
+        );
+        eprintln!(
+            "hexray: BVH of {} primitives built in {:.3} s",
+            flat.triangles.len() + flat.spheres.len(),
+            flat.bvh_seconds
+        );
+        for line in mesh_lines(&scene) {
+            eprintln!("hexray: {line}");
+        }
+    }
+
+    // What every output of this render records: the settings, the scene, and the time of all
+    // sessions (a resumed render adds to the time before).
+    let earlier_seconds = resumed.as_ref().map_or(0.0, |(_, id)| id.render_seconds);
+    let (backend_name, backend_device) = (backend.name(), backend.device());
+    let record = |film: &Film, seconds: f64| -> (Metadata, FilmIdentity) {
+        let mut meta = Metadata::default();
+        meta.set("spp", film.spp());
+        meta.set("seed", args.seed);
+        meta.set("light_samples", args.light_samples);
+        meta.set("method", method);
+        meta.set("backend", backend_name);
+        meta.set("device", &backend_device);
+        meta.set(
+            "render_seconds",
+            format!("{:.6}", earlier_seconds + seconds),
+        );
+        meta.set("scene", scene_path.display());
+        meta.set("scene_name", &scene.desc.name);
+        meta.set("scene_sha1", &scene.sha1);
+        meta.set("hexray_version", env!("CARGO_PKG_VERSION"));
+        meta.set("dropped_samples", film.dropped());
+        meta.set("width", args.width);
+        meta.set("height", args.height);
+        let merges = method.merges();
+        let id = FilmIdentity {
+            version: FilmIdentity::VERSION,
+            width: args.width,
+            height: args.height,
+            spp: film.spp(),
+            seed: args.seed,
+            method: method.to_string(),
+            light_samples: args.light_samples,
+            merge_radius: merges.then_some(radius.initial),
+            merge_alpha: merges.then_some(radius.alpha),
+            scene: scene_path.display().to_string(),
+            scene_sha1: scene.sha1.clone(),
+            render_seconds: earlier_seconds + seconds,
+        };
+        (meta, id)
+    };
+
+    let mut film = match resumed {
+        Some((film, _)) => film,
+        None => Film::new(args.width, args.height),
+    };
+    let mut progress = Progress::new(args.quiet, budget, before, pixels);
+    let mut last_checkpoint = 0.0;
+    let report = render_progressive(
+        backend.as_mut(),
+        &mut film,
+        budget,
+        stop.flag(),
+        |film, spp, secs| {
+            progress.update(spp, secs);
+            // --checkpoint: the outputs so far, atomically, so a kill loses at most the interval.
+            if args
+                .checkpoint
+                .is_some_and(|every| secs - last_checkpoint >= every)
+            {
+                last_checkpoint = secs;
+                let (meta, id) = record(film, secs);
+                if let Err(e) = write_outputs(&out, film, &meta, &id, args) {
+                    progress.println(&format!("hexray: warning: checkpoint not written: {e:#}"));
+                }
+            }
+        },
+    );
+    progress.finish();
+
+    // A render that took no new samples writes nothing: earlier files stay as they were.
+    if film.spp() == before {
+        eprintln!("hexray: no samples were taken; nothing written");
+        return Ok(match report.reason {
+            StopReason::Interrupted => ExitCode::from(stop.exit_status()),
+            StopReason::Failed(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+            _ => ExitCode::SUCCESS,
+        });
+    }
+    let (mut meta, id) = record(&film, report.seconds);
+    let provenance = backend.provenance();
+    for (key, value) in &provenance {
+        meta.set(key, value);
+    }
+    write_outputs(&out, &film, &meta, &id, args)?;
+
+    let taken = film.spp() * pixels;
+    let dropped = film.dropped();
+    let dropped_share = dropped as f64 / taken as f64;
+    if dropped > 0 {
+        // Never silent: a dropped sample is light missing from the image.
+        eprintln!(
+            "hexray: warning: dropped {dropped} of {taken} samples ({:.3} %) whose value was not \
+             finite{}",
+            100.0 * dropped_share,
+            if dropped_share > DROPPED_SHARE_LIMIT {
+                format!(
+                    "; above {} %, so the exit status is {EXIT_DROPPED}",
+                    100.0 * DROPPED_SHARE_LIMIT
+                )
+            } else {
+                String::new()
+            }
+        );
+    }
+    if !args.quiet {
+        let (mean, se) = film.image_mean();
+        let paths = (film.spp() - before) as f64 * pixels as f64;
+        let why = match &report.reason {
+            StopReason::SampleCount => "sample count reached",
+            StopReason::TimeBudget => "time budget reached",
+            StopReason::Interrupted => "interrupted; samples so far kept",
+            StopReason::Failed(_) => "the backend failed; samples so far kept",
+        };
+        let resumed_from = if before > 0 {
+            format!(" (resumed from {before})")
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "rendered {} spp{resumed_from} with {} in {:.2} s ({:.3} M camera paths/s; {why}); \
+             dropped {dropped} samples",
+            film.spp(),
+            method,
+            report.seconds,
+            paths / report.seconds / 1e6,
+        );
+        eprintln!(
+            "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
+            mean[0], mean[1], mean[2], se[0], se[1], se[2]
+        );
+        if method.merges() {
+            eprintln!(
+                "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
+                 (alpha {}) leaves a bias that the standard error does not cover",
+                method,
+                radius.initial,
+                radius.at((film.spp() as u32).saturating_sub(1)),
+                radius.alpha
+            );
+        }
+        for (key, value) in &provenance {
+            eprintln!("{key}: {value}");
+        }
+        let (exr, png, var) = output::output_paths(&out);
+        eprintln!(
+            "wrote {}, {} and {}",
+            exr.display(),
+            png.display(),
+            film_file::film_path(&exr).display()
+        );
+        if args.variance {
+            if film.spp() >= 2 {
+                eprintln!("wrote {}", var.display());
+            } else {
+                eprintln!(
+                    "no variance written: one sample per pixel has no sample variance \
+                     ({} left as it was)",
+                    var.display()
+                );
+            }
+        }
+    }
+    Ok(match report.reason {
+        StopReason::Interrupted => ExitCode::from(stop.exit_status()),
+        StopReason::Failed(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+        _ if dropped_share > DROPPED_SHARE_LIMIT => ExitCode::from(EXIT_DROPPED),
+        _ => ExitCode::SUCCESS,
+    })
+}
+
+/// The progress of a render on stderr: a bar on a terminal; elsewhere (batch logs) a plain line
+/// every [`Progress::LOG_EVERY`] seconds. Both give samples, the rate, elapsed time and what
+/// is left (an ETA for a sample count, the remaining time for --time).
+pub(crate) struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    log: bool,
+    last_log: f64,
+    budget: Budget,
+    before: u64,
+    pixels: u64,
+}
+
+impl Progress {
+    const LOG_EVERY: f64 = 10.0;
+
+    fn new(quiet: bool, budget: Budget, before: u64, pixels: u64) -> Progress {
+        let terminal = std::io::stderr().is_terminal();
+        let bar = (!quiet && terminal).then(|| {
+            let bar = indicatif::ProgressBar::new(1000);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:40} {msg}")
+                    .expect("a valid template"),
+            );
+            bar
+        });
+        Progress {
+            bar,
+            log: !quiet && !terminal,
+            last_log: 0.0,
+            budget,
+            before,
+            pixels,
+        }
+    }
+
+    fn line(&self, spp: u32, secs: f64) -> (String, f64) {
+        let new = spp as f64 - self.before as f64;
+        let rate = new * self.pixels as f64 / secs / 1e6;
+        let mut fraction = 0.0f64;
+        let mut left = f64::INFINITY;
+        if let Some(n) = self.budget.spp {
+            let target = self.before as f64 + n as f64;
+            fraction = new / n as f64;
+            left = (target - spp as f64) * secs / new.max(1.0);
+        }
+        if let Some(t) = self.budget.seconds {
+            fraction = fraction.max(secs / t);
+            left = left.min((t - secs).max(0.0));
+        }
+        let target = self
+            .budget
+            .spp
+            .map_or(String::new(), |n| format!("/{}", self.before + n as u64));
+        (
+            format!(
+                "{spp}{target} spp, {rate:.3} M camera paths/s, {} elapsed, {} left",
+                clock(secs),
+                clock(left)
+            ),
+            fraction.clamp(0.0, 1.0),
+        )
+    }
+
+    fn update(&mut self, spp: u32, secs: f64) {
+        if let Some(bar) = &self.bar {
+            let (msg, fraction) = self.line(spp, secs);
+            bar.set_position((fraction * 1000.0) as u64);
+            bar.set_message(msg);
+        } else if self.log && secs - self.last_log >= Self::LOG_EVERY {
+            self.last_log = secs;
+            eprintln!("hexray: {}", self.line(spp, secs).0);
+        }
+    }
+
+    fn println(&self, text: &str) {
+        match &self.bar {
+            Some(bar) => bar.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+
+    fn finish(self) {
+        if let Some(bar) = self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// Seconds as h:mm:ss (or m:ss), "?" when unknown.
+pub(crate) fn clock(secs: f64) -> String {
+    if !secs.is_finite() {
+        return "?".into();
+    }
+    let s = secs.round() as u64;
+    if s >= 3600 {
+        format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+    } else {
+        format!("{}:{:02}", s / 60, s % 60)
+    }
+}
+
+/// Writes the render's EXR, PNG and film (and its variance with --variance, where there are
+/// two samples or more to estimate it from), each atomically.
+pub(crate) fn write_outputs(
+    out: &Path,
+    film: &Film,
+    meta: &Metadata,
+    id: &FilmIdentity,
+    args: &RenderArgs,
+) -> Result<()> {
+    let (exr, png, var) = output::output_paths(out);
+    let image = RgbImage {
+        width: film.width as usize,
+        height: film.height as usize,
+        pixels: film.mean_image(),
+    };
+    output::write_exr(&exr, &image, meta)?;
+    output::write_png(&png, &image, args.exposure)?;
+    film_file::write(&film_file::film_path(&exr), film, id)?;
+    if args.variance && film.spp() >= 2 {
+        let v = RgbImage {
+            pixels: film.variance_image(),
+            ..image
+        };
+        let mut vmeta = meta.clone();
+        vmeta.set("content", "variance of the pixel mean");
+        output::write_exr(&var, &v, &vmeta)?;
+    }
+    Ok(())
+}
