@@ -154,7 +154,7 @@ until [ "$(squeue -h -j "${array}_1" -o %T 2>/dev/null)" = RUNNING ]; do
     t=$((t + 1))
     [ "$t" -lt 300 ] || fail "task 1 did not start: $(squeue)"
 done
-sleep 1.5
+sleep 0.7 # some hundred samples in, several seconds from the end
 queued "${array}_1" || fail "task 1 ended before it could be stopped; raise SPP"
 # Once only: a second SIGTERM makes hexray exit at once.
 scancel --signal=TERM --batch "${array}_1" || say "scancel exited $? (seen with Slurm 22.05 while delivering the signal)"
