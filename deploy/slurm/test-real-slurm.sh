@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # deploy/slurm on a real Slurm, end to end, on this machine alone:
-#   1. installs Debian's slurm-wlm and munge if they are missing (apt-get; needs root),
+#   1. installs what Debian 12's slurm-wlm consists of (slurmctld, slurmd, slurm-client, without
+#      the recommended plugins) and munge if they are missing (apt-get; needs root),
 #   2. starts munged, slurmctld and slurmd by hand (no systemd, no cgroups: proctrack/linuxproc)
 #      with a slurm.conf for one node, this host, with its real CPUs and memory, on ports of its own,
 #   3. submits the part array with submit.sh (PARTS parts of cornell_box, 64x64, path, CPU),
@@ -16,7 +17,7 @@
 set -euo pipefail
 start=$(date +%s.%N)
 repo=$(cd "$(dirname "$0")/../.." && pwd)
-HEXRAY=$(realpath "${HEXRAY:-$repo/target/release/hexray}")
+HEXRAY=$(realpath -m "${HEXRAY:-$repo/target/release/hexray}")
 PARTS=${PARTS:-4} SPP=${SPP:-1500} PORT=${PORT:-16817}
 say() { printf 'test-real-slurm: %s\n' "$*" >&2; }
 fail() { say "FAIL: $*"; exit 1; }
