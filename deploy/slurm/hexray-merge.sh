@@ -3,7 +3,6 @@
 #SBATCH --job-name=hexray-merge
 #SBATCH --cpus-per-task=1
 #SBATCH --time=00:10:00
-#SBATCH --output=parts/slurm-merge-%j.out
 set -euo pipefail
 : "${OUTDIR:=parts}" "${HEXRAY:=hexray}"
 shopt -s nullglob
@@ -11,4 +10,4 @@ parts=()
 for f in "$OUTDIR"/part_*.exr; do
     case "$f" in *_var.exr) ;; *) parts+=("$f") ;; esac
 done
-"$HEXRAY" merge "${parts[@]}" -o "$OUTDIR/merged.exr"
+exec "$HEXRAY" merge "${parts[@]}" -o "$OUTDIR/merged.exr"
