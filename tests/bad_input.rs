@@ -492,3 +492,54 @@ fn radiance_beyond_the_splat_range_is_refused_for_the_splatting_methods_only() {
     let o = run("path");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Parser gaps (issue 16): what serde accepted silently is refused through the CLI as any other
+/// bad scene, exit 2 and `FILE:LINE:COL: PATH: message` with a help line.
+#[test]
+fn trailing_content_duplicates_and_positional_arrays_are_refused_with_a_location() {
+    let text = std::fs::read_to_string(repo(ROOM)).unwrap();
+    let mut positional: Value = serde_json::from_str(&text).unwrap();
+    let c = positional["camera"].clone();
+    positional["camera"] = json!([c["eye"], c["look_at"], c["up"], c["vfov_deg"]]);
+    for (tag, broken, located) in [
+        ("trailing", format!("{}\n{{}}\n", text.trim_end()), ""),
+        (
+            "duplicate_material",
+            text.replacen(
+                "\"red\": {",
+                "\"red\": {\"type\": \"diffuse\", \"albedo\": [0, 0, 0]},\n  \"red\": {",
+                1,
+            ),
+            "materials.red: duplicate material name `red`",
+        ),
+        (
+            "positional",
+            serde_json::to_string_pretty(&positional).unwrap(),
+            "camera: expected an object with named fields",
+        ),
+    ] {
+        let (stderr, file) = run_refused(tag, &broken);
+        let first = stderr.lines().next().unwrap_or("");
+        let prefix = format!("error: {}:", file.display());
+        assert!(first.starts_with(&prefix), "{tag}: {stderr}");
+        let mut parts = first[prefix.len()..].splitn(3, ':');
+        let line: usize = parts.next().unwrap().parse().expect("line");
+        let col: usize = parts.next().unwrap().parse().expect("column");
+        assert!(line >= 1 && col >= 1, "{tag}: {first}");
+        assert!(
+            parts.next().unwrap().trim_start().starts_with(located),
+            "{tag}: {first}"
+        );
+        assert!(stderr.contains("\n  help: "), "{tag}: {stderr}");
+    }
+}
+
+#[test]
+fn a_scene_with_a_byte_order_mark_is_accepted() {
+    let dir = temp_dir("bom");
+    let scene = dir.join("bom.json");
+    let text = std::fs::read_to_string(repo(ROOM)).unwrap();
+    std::fs::write(&scene, format!("\u{feff}{text}")).unwrap();
+    let o = hexray(&["info", scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 /// A whole scene: one pinhole camera, named materials, and the geometry that uses them.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct SceneDesc {
     /// The scene's name, for logs and output metadata.
     #[serde(default)]
@@ -42,7 +42,7 @@ pub struct SceneDesc {
 /// A pinhole camera; images are as wide as `--width` and as tall as `--height`, with square
 /// pixels, so the horizontal field of view follows from the aspect ratio.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct CameraDesc {
     /// The centre of projection.
     pub eye: [f64; 3],
@@ -58,8 +58,11 @@ pub struct CameraDesc {
 }
 
 /// The four material kinds. `type` selects the kind; each kind takes only its own fields.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+///
+/// Read as a [`RawMaterial`] (one object with every material field), then checked to hold only
+/// its kind's fields: the fields are read in place, so an error in one points at that field,
+/// which serde's buffered internally tagged enums cannot do.
+#[derive(Debug, Clone)]
 pub enum MaterialDesc {
     /// Two-sided Lambertian reflector.
     Diffuse {
@@ -76,7 +79,6 @@ pub enum MaterialDesc {
         /// Index of refraction inside (outside is 1.0); must be > 0.
         ior: f64,
         /// Multiplies the light at each refraction, each channel in [0, 1]; default white.
-        #[serde(default = "white")]
         tint: [f64; 3],
     },
     /// One-sided area light: emits on the side of (v1 - v0) x (v2 - v0), black behind.
@@ -84,11 +86,9 @@ pub enum MaterialDesc {
         /// Emitted linear RGB radiance, each channel >= 0.
         radiance: [f64; 3],
         /// Must be true when given: two-sided emitters are not modelled.
-        #[serde(default = "yes")]
         one_sided: bool,
         /// Optional Lambertian reflectance of the emitting surface (default black), each
         /// channel in [0, 1]; the furnace tests use emitters that also reflect.
-        #[serde(default)]
         albedo: [f64; 3],
     },
 }
@@ -102,7 +102,7 @@ fn yes() -> bool {
 
 /// One triangle. Its winding fixes the emitting side of an emitter.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct TriangleDesc {
     /// The three vertices.
     pub v: [[f64; 3]; 3],
@@ -115,7 +115,7 @@ pub struct TriangleDesc {
 
 /// One sphere.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct SphereDesc {
     /// Centre.
     pub center: [f64; 3],
@@ -131,7 +131,7 @@ pub struct SphereDesc {
 
 /// An axis-aligned box, expanded to 12 triangles whose normals face outward.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct BoxDesc {
     /// The minimum corner.
     pub min: [f64; 3],
@@ -158,7 +158,7 @@ pub struct BoxDesc {
 /// area once rounded to f32 is dropped and counted (`render` and `info` report the count and
 /// the first such face); every other defect of the file is an error that names it.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct MeshDesc {
     /// The mesh file, relative to the folder of the scene file: `.ply` (ASCII, binary little or
     /// big endian; float or double vertices; faces as a list of any integer type) or `.obj`
@@ -199,7 +199,7 @@ impl Scale {
 /// A rotation by `degrees` about `axis`, counter-clockwise seen from the axis's tip (the
 /// right-hand rule).
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(remote = "Self", deny_unknown_fields)]
 pub struct RotateDesc {
     /// The axis; any nonzero length (it is normalised in f64).
     pub axis: [f64; 3],
@@ -310,6 +310,136 @@ impl BoxDesc {
             out[2 * f + 1] = [c(q[0]), c(q[2]), c(q[3])];
         }
         out
+    }
+}
+
+/// Every field any material takes; [`MaterialDesc`]'s `Deserialize` reads this, then checks
+/// that only the kind's own fields were given.
+#[derive(Deserialize)]
+#[serde(remote = "Self", deny_unknown_fields)]
+struct RawMaterial {
+    #[serde(rename = "type")]
+    kind: MaterialKind,
+    albedo: Option<[f64; 3]>,
+    reflectance: Option<[f64; 3]>,
+    ior: Option<f64>,
+    tint: Option<[f64; 3]>,
+    radiance: Option<[f64; 3]>,
+    one_sided: Option<bool>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "snake_case")]
+enum MaterialKind {
+    Diffuse,
+    Mirror,
+    Glass,
+    Emitter,
+}
+
+impl RawMaterial {
+    /// The material, or the message for the first field its kind does not take (worded as
+    /// serde's "unknown field" so that the loader points at the field) or lacks.
+    fn into_desc(self) -> Result<MaterialDesc, String> {
+        use MaterialKind::*;
+        let (kind, own): (&str, &[&str]) = match self.kind {
+            Diffuse => ("diffuse", &["albedo"]),
+            Mirror => ("mirror", &["reflectance"]),
+            Glass => ("glass", &["ior", "tint"]),
+            Emitter => ("emitter", &["radiance", "one_sided", "albedo"]),
+        };
+        let given = [
+            ("albedo", self.albedo.is_some()),
+            ("reflectance", self.reflectance.is_some()),
+            ("ior", self.ior.is_some()),
+            ("tint", self.tint.is_some()),
+            ("radiance", self.radiance.is_some()),
+            ("one_sided", self.one_sided.is_some()),
+        ];
+        if let Some((field, _)) = given.iter().find(|(f, g)| *g && !own.contains(f)) {
+            let expected: Vec<String> = std::iter::once("type")
+                .chain(own.iter().copied())
+                .map(|f| format!("`{f}`"))
+                .collect();
+            return Err(format!(
+                "unknown field `{field}`, a {kind} material takes {}",
+                expected.join(", ")
+            ));
+        }
+        let missing = |f: &str| format!("missing field `{f}` (a {kind} material needs it)");
+        Ok(match self.kind {
+            Diffuse => MaterialDesc::Diffuse {
+                albedo: self.albedo.ok_or_else(|| missing("albedo"))?,
+            },
+            Mirror => MaterialDesc::Mirror {
+                reflectance: self.reflectance.ok_or_else(|| missing("reflectance"))?,
+            },
+            Glass => MaterialDesc::Glass {
+                ior: self.ior.ok_or_else(|| missing("ior"))?,
+                tint: self.tint.unwrap_or_else(white),
+            },
+            Emitter => MaterialDesc::Emitter {
+                radiance: self.radiance.ok_or_else(|| missing("radiance"))?,
+                one_sided: self.one_sided.unwrap_or_else(yes),
+                albedo: self.albedo.unwrap_or_default(),
+            },
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialDesc {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let raw: RawMaterial = RawMaterial::deserialize(ObjectOnly(d))?;
+        raw.into_desc().map_err(serde::de::Error::custom)
+    }
+}
+
+/// `Deserialize` for the scene's structs, from JSON objects only. serde's derive also accepts a
+/// struct written as an array of its fields in order (`"camera": [[0, 0, 0], ...]`), which no
+/// one means to write; each struct derives with `remote = "Self"` (an inherent `deserialize`)
+/// and is read here through [`ObjectOnly`], which asks for a map.
+macro_rules! objects_only {
+    ($($t:ty),*) => {$(
+        impl<'de> Deserialize<'de> for $t {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                <$t>::deserialize(ObjectOnly(d))
+            }
+        }
+    )*};
+}
+objects_only!(
+    SceneDesc,
+    CameraDesc,
+    TriangleDesc,
+    SphereDesc,
+    BoxDesc,
+    MeshDesc,
+    RotateDesc
+);
+
+/// A deserializer that reads a struct as a map (never as a sequence) and passes everything else on.
+struct ObjectOnly<D>(D);
+
+impl<'de, D: serde::Deserializer<'de>> serde::Deserializer<'de> for ObjectOnly<D> {
+    type Error = D::Error;
+
+    fn deserialize_any<V: serde::de::Visitor<'de>>(self, v: V) -> Result<V::Value, D::Error> {
+        self.0.deserialize_any(v)
+    }
+
+    fn deserialize_struct<V: serde::de::Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _fields: &'static [&'static str],
+        v: V,
+    ) -> Result<V::Value, D::Error> {
+        self.0.deserialize_map(v)
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+        option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+        ignored_any
     }
 }
 

@@ -48,10 +48,154 @@ impl fmt::Display for JsonPath {
 
 /// The 1-based line and column where the value at `path` begins, or None if the path is not in
 /// the text (then the caller reports the path alone).
+/// A leading UTF-8 byte order mark is skipped (the loader accepts one), so positions are those
+/// an editor shows.
 pub fn locate(text: &str, path: &JsonPath) -> Option<(usize, usize)> {
+    let text = strip_bom(text);
     let bytes = text.as_bytes();
     let pos = find(bytes, 0, &path.0)?;
     Some(line_col(text, pos))
+}
+
+/// The byte offset where the value at `path` begins in `text` (no byte order mark).
+pub fn find_offset(text: &str, path: &JsonPath) -> Option<usize> {
+    find(text.as_bytes(), 0, &path.0)
+}
+
+/// Where the value at `path` begins or, when it is not in the text (a defaulted field), where
+/// its nearest enclosing value that is begins: every error then has a line and column.
+pub fn locate_nearest(text: &str, path: &JsonPath) -> Option<(usize, usize)> {
+    (0..=path.0.len())
+        .rev()
+        .find_map(|n| locate(text, &JsonPath(path.0[..n].to_vec())))
+}
+
+/// The text without a leading UTF-8 byte order mark.
+pub fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
+/// The byte offset of serde_json's (line, column), where the column counts bytes from 1 and 0
+/// means "just after the line break" (taken as column 1). Clamped to the text and moved back to
+/// a character boundary.
+pub fn offset_of(text: &str, line: usize, column: usize) -> usize {
+    let mut start = 0;
+    for _ in 1..line {
+        match text[start..].find('\n') {
+            Some(i) => start += i + 1,
+            None => break,
+        }
+    }
+    let mut pos = (start + column.max(1) - 1).min(text.len());
+    while !text.is_char_boundary(pos) {
+        pos -= 1;
+    }
+    pos
+}
+
+/// A key that appears twice in one JSON object: where the second one begins, the path of its
+/// value, and where the first one begins (byte offsets).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DuplicateKey {
+    pub at: usize,
+    pub path: JsonPath,
+    pub first_at: usize,
+}
+
+/// The first duplicate key in the document, comparing keys as decoded (`"a"` and `"\u0061"`
+/// are the same key). serde keeps the last of duplicate map keys without a word, so the loader
+/// looks for them first. Text that is not valid JSON (or nests deeper than serde_json's limit
+/// of 128) ends the search with None: serde reports the syntax error.
+pub fn duplicate_key(text: &str) -> Option<DuplicateKey> {
+    let b = text.as_bytes();
+    let mut path = Vec::new();
+    match scan_dups(b, skip_ws(b, 0), &mut path, 0) {
+        Err(Stop::Duplicate(d)) => Some(d),
+        _ => None,
+    }
+}
+
+enum Stop {
+    Duplicate(DuplicateKey),
+    Invalid,
+}
+
+/// The key's text as decoded: escapes resolved (raw bytes when they do not decode).
+fn decode_key(quoted: &[u8]) -> String {
+    let raw = &quoted[1..quoted.len() - 1];
+    if raw.contains(&b'\\') {
+        if let Ok(k) = serde_json::from_slice::<String>(quoted) {
+            return k;
+        }
+    }
+    String::from_utf8_lossy(raw).into_owned()
+}
+
+/// Scans the value at `i` (no leading whitespace); returns the position just past it.
+fn scan_dups(b: &[u8], i: usize, path: &mut Vec<Seg>, depth: usize) -> Result<usize, Stop> {
+    if depth > 128 {
+        return Err(Stop::Invalid);
+    }
+    match b.get(i) {
+        Some(b'{') => {
+            let mut seen: std::collections::HashMap<String, usize> = Default::default();
+            let mut j = skip_ws(b, i + 1);
+            if b.get(j) == Some(&b'}') {
+                return Ok(j + 1);
+            }
+            loop {
+                let (after_key, _) = scan_string(b, j).ok_or(Stop::Invalid)?;
+                let key = decode_key(&b[j..after_key]);
+                if let Some(&first_at) = seen.get(&key) {
+                    path.push(Seg::Key(key));
+                    return Err(Stop::Duplicate(DuplicateKey {
+                        at: j,
+                        path: JsonPath(path.clone()),
+                        first_at,
+                    }));
+                }
+                seen.insert(key.clone(), j);
+                let colon = skip_ws(b, after_key);
+                if b.get(colon) != Some(&b':') {
+                    return Err(Stop::Invalid);
+                }
+                path.push(Seg::Key(key));
+                let end = scan_dups(b, skip_ws(b, colon + 1), path, depth + 1)?;
+                path.pop();
+                j = skip_ws(b, end);
+                match b.get(j) {
+                    Some(b',') => j = skip_ws(b, j + 1),
+                    Some(b'}') => return Ok(j + 1),
+                    _ => return Err(Stop::Invalid),
+                }
+            }
+        }
+        Some(b'[') => {
+            let mut j = skip_ws(b, i + 1);
+            if b.get(j) == Some(&b']') {
+                return Ok(j + 1);
+            }
+            let mut n = 0;
+            loop {
+                path.push(Seg::Index(n));
+                let end = scan_dups(b, j, path, depth + 1)?;
+                path.pop();
+                j = skip_ws(b, end);
+                match b.get(j) {
+                    Some(b',') => j = skip_ws(b, j + 1),
+                    Some(b']') => return Ok(j + 1),
+                    _ => return Err(Stop::Invalid),
+                }
+                n += 1;
+            }
+        }
+        Some(b'"') => scan_string(b, i).map(|(j, _)| j).ok_or(Stop::Invalid),
+        Some(_) => match skip_value(b, i) {
+            Some(j) if j > i => Ok(j),
+            _ => Err(Stop::Invalid),
+        },
+        None => Err(Stop::Invalid),
+    }
 }
 
 /// 1-based line and column (in characters) of a byte offset.
@@ -70,7 +214,7 @@ fn skip_ws(b: &[u8], mut i: usize) -> usize {
 }
 
 /// Returns the position just past the string that starts at `i` (which must be a quote), and the
-/// string's raw contents (escapes left as written: keys in scene files are plain).
+/// string's raw contents (escapes left as written; see [`decode_key`]).
 fn scan_string(b: &[u8], i: usize) -> Option<(usize, &[u8])> {
     if b.get(i) != Some(&b'"') {
         return None;
@@ -137,11 +281,16 @@ fn find(b: &[u8], i: usize, path: &[Seg]) -> Option<usize> {
                     return None;
                 }
                 let (after_key, k) = scan_string(b, j)?;
+                let matches = if k.contains(&b'\\') {
+                    decode_key(&b[j..after_key]) == *key
+                } else {
+                    k == key.as_bytes()
+                };
                 j = skip_ws(b, after_key);
                 if b.get(j) != Some(&b':') {
                     return None;
                 }
-                if k == key.as_bytes() {
+                if matches {
                     return find(b, j + 1, &path[1..]);
                 }
                 j = skip_ws(b, skip_value(b, j + 1)?);

@@ -102,76 +102,31 @@ impl Scene {
                  right file?",
             ));
         }
-        let text = String::from_utf8(bytes).map_err(|e| {
-            let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-            let column = before.len()
-                - before
-                    .iter()
-                    .rposition(|&b| b == b'\n')
-                    .map_or(0, |i| i + 1)
-                + 1;
-            SceneError {
-                line_col: Some((line, column)),
-                ..error(
-                    "the scene file is not valid UTF-8 here".into(),
-                    "save the file as UTF-8",
-                )
-            }
-        })?;
-        Self::from_json(&text, path)
+        Self::from_json(Self::decode(&bytes, path)?, path)
     }
 
-    /// Parses and validates scene JSON; `path` is only used in messages and metadata.
-    pub fn from_json(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
-            let inner = e.inner();
-            let mut line_col = (inner.line() > 0).then(|| (inner.line(), inner.column()));
-            let mut json_path = JsonPath::root();
-            for seg in e.path().iter() {
-                json_path = match seg {
-                    serde_path_to_error::Segment::Seq { index } => json_path.index(*index),
-                    serde_path_to_error::Segment::Map { key } => json_path.key(key),
-                    serde_path_to_error::Segment::Enum { variant } => json_path.key(variant),
-                    serde_path_to_error::Segment::Unknown => json_path,
-                };
-            }
-            let msg = inner.to_string();
-            // serde_json appends " at line L column C"; the location is already in front.
-            let msg = msg
-                .rsplit_once(" at line ")
-                .map_or(msg.as_str(), |(m, _)| m)
-                .to_string();
-            // Inside a material (an internally tagged enum) serde reports an unknown field at the
-            // end of the object; point at the field itself.
-            if let Some(field) = msg
-                .strip_prefix("unknown field `")
-                .and_then(|m| m.split('`').next())
-            {
-                let with_field = json_path.key(field);
-                if json_path.0.last() != with_field.0.last() {
-                    if let Some(lc) = locate::locate(text, &with_field) {
-                        json_path = with_field;
-                        line_col = Some(lc);
-                    }
-                }
-            }
+    /// The scene file's bytes as text, or an error located at the first byte that is not
+    /// UTF-8.
+    pub fn decode<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str, SceneError> {
+        std::str::from_utf8(bytes).map_err(|e| {
+            let before = &bytes[..e.valid_up_to()];
+            let before = std::str::from_utf8(before).unwrap_or_default();
+            let before = locate::strip_bom(before);
             SceneError {
                 file: path.to_path_buf(),
-                line_col,
-                path: json_path.to_string(),
-                help: parse_help(&msg),
-                message: msg,
+                line_col: Some(locate::line_col(before, before.len())),
+                path: String::new(),
+                message: "the scene file is not valid UTF-8 here".into(),
+                help: "save the file as UTF-8".into(),
             }
-        })?;
-        validate::validate(&desc).map_err(|issue| SceneError {
-            file: path.to_path_buf(),
-            line_col: locate::locate(text, &issue.path),
-            path: issue.path.to_string(),
-            message: issue.message,
-            help: issue.help,
-        })?;
+        })
+    }
+
+    /// Parses and validates scene JSON and reads its meshes; `path` is used in messages and
+    /// metadata, and mesh files are found relative to its folder.
+    pub fn from_json(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let desc = Self::parse(text, path)?;
+        let body = locate::strip_bom(text);
         let mut sha1 = sha1_smol::Sha1::from(text.as_bytes());
         let folder = path.parent().unwrap_or(Path::new(""));
         let mut meshes = Vec::with_capacity(desc.meshes.len());
@@ -179,7 +134,7 @@ impl Scene {
             let at = JsonPath::root().key("meshes").index(i).key("file");
             let located = |message: String, help: String| SceneError {
                 file: path.to_path_buf(),
-                line_col: locate::locate(text, &at),
+                line_col: locate::locate(body, &at),
                 path: at.to_string(),
                 message,
                 help,
@@ -208,6 +163,113 @@ impl Scene {
         })
     }
 
+    /// Parses and validates scene JSON without reading its meshes; `path` is only used in
+    /// messages. Every error has a 1-based line and column (in characters) and, below the root,
+    /// the JSON path of the value. A leading UTF-8 byte order mark is skipped, as most JSON
+    /// readers do (positions are then those an editor shows).
+    pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
+        let text = locate::strip_bom(text);
+        let located =
+            |pos: usize, json_path: &JsonPath, message: String, help: String| SceneError {
+                file: path.to_path_buf(),
+                line_col: Some(locate::line_col(text, pos)),
+                path: json_path.to_string(),
+                message,
+                help,
+            };
+        // serde keeps the last of two equal map keys (two materials of one name) without a word,
+        // so duplicate keys are looked for first, anywhere in the document.
+        if let Some(d) = locate::duplicate_key(text) {
+            let (l, c) = locate::line_col(text, d.first_at);
+            let under_materials =
+                d.path.0.len() == 2 && d.path.0[0] == locate::Seg::Key("materials".into());
+            let (what, help) = if under_materials {
+                (
+                    "duplicate material name",
+                    "give each material its own name; geometry refers to materials by name",
+                )
+            } else {
+                (
+                    "duplicate key",
+                    "each key may appear once in an object; remove one of the two",
+                )
+            };
+            let key = match d.path.0.last() {
+                Some(locate::Seg::Key(k)) => k.clone(),
+                _ => String::new(),
+            };
+            return Err(located(
+                d.at,
+                &d.path,
+                format!("{what} `{key}` (the first is at {l}:{c})"),
+                help.into(),
+            ));
+        }
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let parsed = match serde_path_to_error::deserialize::<_, SceneDesc>(&mut *de) {
+            // Trailing content after the scene object is an error, not ignored.
+            Ok(desc) => de.end().map(|()| desc).map_err(|e| (JsonPath::root(), e)),
+            Err(e) => {
+                let mut json_path = JsonPath::root();
+                for seg in e.path().iter() {
+                    json_path = match seg {
+                        serde_path_to_error::Segment::Seq { index } => json_path.index(*index),
+                        serde_path_to_error::Segment::Map { key } => json_path.key(key),
+                        serde_path_to_error::Segment::Enum { variant } => json_path.key(variant),
+                        serde_path_to_error::Segment::Unknown => json_path,
+                    };
+                }
+                Err((json_path, e.into_inner()))
+            }
+        };
+        let desc = parsed.map_err(|(mut json_path, inner)| {
+            let mut pos = locate::offset_of(text, inner.line(), inner.column());
+            let msg = inner.to_string();
+            // serde_json appends " at line L column C"; the location is already in front.
+            let mut msg = msg
+                .rsplit_once(" at line ")
+                .map_or(msg.as_str(), |(m, _)| m)
+                .to_string();
+            if inner.is_data() {
+                // A value that parsed but has the wrong type or content: serde_json stands at
+                // its end (for a material, at the closing brace); point at its start.
+                if let Some(p) = locate::find_offset(text, &json_path) {
+                    pos = p;
+                }
+                // An unknown field is reported on its object; point at the field itself.
+                if let Some(field) = msg
+                    .strip_prefix("unknown field `")
+                    .and_then(|m| m.split('`').next())
+                {
+                    let with_field = json_path.key(field);
+                    if let Some(p) = locate::find_offset(text, &with_field) {
+                        json_path = with_field;
+                        pos = p;
+                    }
+                }
+                if msg.starts_with("invalid type: sequence, expected struct") {
+                    msg = "expected an object with named fields, found an array".into();
+                } else if let Some((head, _)) = msg.split_once(", expected struct ") {
+                    // The Rust type's name means nothing to the scene's author.
+                    msg = format!("{head}, expected an object");
+                }
+            }
+            if msg.starts_with("trailing characters") {
+                msg = "content after the end of the scene's JSON object".into();
+            }
+            let help = parse_help(&msg);
+            located(pos, &json_path, msg, help)
+        })?;
+        validate::validate(&desc).map_err(|issue| SceneError {
+            file: path.to_path_buf(),
+            line_col: locate::locate_nearest(text, &issue.path),
+            path: issue.path.to_string(),
+            message: issue.message,
+            help: issue.help,
+        })?;
+        Ok(desc)
+    }
+
     /// The number of triangles the scene renders: inline, from meshes and from boxes.
     pub fn triangle_count(&self) -> usize {
         self.desc.triangles.len()
@@ -223,7 +285,7 @@ impl Scene {
         let text = std::fs::read_to_string(&self.path).unwrap_or_default();
         SceneError {
             file: self.path.clone(),
-            line_col: locate::locate(&text, &issue.path),
+            line_col: locate::locate_nearest(&text, &issue.path),
             path: issue.path.to_string(),
             message: issue.message,
             help: issue.help,
@@ -240,6 +302,12 @@ fn parse_help(msg: &str) -> String {
         "add the field; the scene format is documented in src/scene/format.rs".into()
     } else if msg.contains("untagged enum Scale") {
         "a mesh's scale is a number or [x, y, z]".into()
+    } else if msg.starts_with("expected an object with named fields") {
+        "write this as a JSON object, {\"field\": value, ...}; the positional array form of \
+         an object is not accepted"
+            .into()
+    } else if msg.starts_with("content after the end") {
+        "a scene file holds one JSON object; remove what follows its closing brace".into()
     } else if msg.contains("invalid type") || msg.contains("invalid length") {
         "numbers are JSON numbers and points are [x, y, z]".into()
     } else {
