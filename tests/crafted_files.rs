@@ -2,24 +2,16 @@
 //! (issue 16): a header that claims more pixels than its file holds is refused before any
 //! allocation, and merge refuses, by file and pixel, what would poison its sums silently.
 
-use crate::common::repo;
 use hexray::output::{read_exr, write_exr, RgbImage};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn hexray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hexray"))
-        .current_dir(repo("."))
-        .args(args)
-        .output()
-        .unwrap()
+    crate::common::hexray_command().args(args).output().unwrap()
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-crafted-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::empty_temp_dir(&format!("crafted-{name}"))
 }
 
 fn s(p: &Path) -> &str {

@@ -10,16 +10,11 @@ use std::process::{Command, Output};
 use std::time::Duration;
 
 fn hexray() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hexray"));
-    c.current_dir(env!("CARGO_MANIFEST_DIR"));
-    c
+    crate::common::hexray_command()
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-lost-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::empty_temp_dir(&format!("lost-{name}"))
 }
 
 /// A small CPU render of `scene` with `args`, into `out`.

@@ -26,6 +26,21 @@ pub fn repo(rel: &str) -> PathBuf {
     }
 }
 
+/// The `hexray` binary, run in the repository root.
+pub fn hexray_command() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hexray"));
+    c.current_dir(repo("."));
+    c
+}
+
+/// An empty folder of this test process for `tag` (emptied if a run left it).
+pub fn empty_temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("hexray-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 pub fn load(rel: &str) -> (Scene, FlatScene) {
     let scene = Scene::load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
     let flat = FlatScene::build(&scene);
