@@ -18,12 +18,12 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// A part of cornell_box at 16x16, 4 spp, with its variance.
-fn part(dir: &Path, name: &str, seed: u32) -> PathBuf {
-    let out = dir.join(name);
-    let o = hexray(&[
+/// A 16x16 path-traced render of `scene` into `out` (with its variance when `variance`).
+fn render(scene: &str, seed: u32, spp: u32, variance: bool, out: &Path) {
+    let (seed, spp) = (seed.to_string(), spp.to_string());
+    let mut args = vec![
         "render",
-        "scenes/cornell_box.json",
+        scene,
         "--backend",
         "cpu",
         "--method",
@@ -33,15 +33,24 @@ fn part(dir: &Path, name: &str, seed: u32) -> PathBuf {
         "--height",
         "16",
         "--spp",
-        "4",
-        "--variance",
+        &spp,
         "-q",
         "--seed",
-        &seed.to_string(),
+        &seed,
         "--out",
-        s(&out),
-    ]);
+        s(out),
+    ];
+    if variance {
+        args.push("--variance");
+    }
+    let o = hexray(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A part of cornell_box at 16x16, 4 spp, with its variance.
+fn part(dir: &Path, name: &str, seed: u32) -> PathBuf {
+    let out = dir.join(name);
+    render("scenes/cornell_box.json", seed, 4, true, &out);
     out
 }
 
@@ -117,26 +126,7 @@ fn a_stale_variance_file_is_refused_by_merge_and_compare() {
     let dir = temp_dir("stale");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     // b rendered again without --variance: its _var.exr is the old render's.
-    let o = hexray(&[
-        "render",
-        "scenes/cornell_box.json",
-        "--backend",
-        "cpu",
-        "--method",
-        "path",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "6",
-        "-q",
-        "--seed",
-        "2",
-        "--out",
-        s(&b),
-    ]);
-    assert!(o.status.success());
+    render("scenes/cornell_box.json", 2, 6, false, &b);
     let o = hexray(&["merge", s(&a), s(&b), "--out", s(&dir.join("m.exr"))]);
     refused(&o, "is from another render (spp 4 against 6)");
     let o = hexray(&["compare", s(&b), s(&a)]);
@@ -157,25 +147,7 @@ fn compare_thresholds_set_the_exit_status_and_other_scenes_are_flagged() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // A render of another scene file is named in the report.
     let c = dir.join("c.exr");
-    let o = hexray(&[
-        "render",
-        "scenes/glass_room.json",
-        "--backend",
-        "cpu",
-        "--method",
-        "path",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "4",
-        "--variance",
-        "-q",
-        "--out",
-        s(&c),
-    ]);
-    assert!(o.status.success());
+    render("scenes/glass_room.json", 1, 4, true, &c);
     let o = hexray(&["compare", s(&c), s(&a)]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("renders of different scene files"));
 }

@@ -3,7 +3,6 @@
 use super::*;
 use anyhow::Result;
 use clap::Args;
-use hexray::gpu;
 use hexray::method::Method;
 use hexray::output;
 use hexray::scene::Scene;
@@ -79,16 +78,9 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
             BenchBackend::Gpu => Which::Gpu,
         })
         .collect();
-    let gpu = if backends.contains(&Which::Gpu) {
-        match gpu::acquire(args.adapter.as_deref()) {
-            Ok(g) => Some(g),
-            Err(e) => {
-                eprintln!("error: --backend gpu: {e}");
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-        }
-    } else {
-        None
+    let gpu = match gpu_if(backends.contains(&Which::Gpu), args.adapter.as_deref()) {
+        Ok(g) => g,
+        Err(code) => return Ok(code),
     };
     let config = bench::Config {
         scenes: args.scenes.iter().map(PathBuf::from).collect(),

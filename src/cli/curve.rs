@@ -5,7 +5,6 @@ use anyhow::{Context, Result};
 use clap::Args;
 use hexray::camera::Camera;
 use hexray::flat::FlatScene;
-use hexray::gpu;
 use hexray::method::Method;
 use hexray::output;
 use hexray::scene::Scene;
@@ -106,16 +105,9 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
         overlay.extend(rows);
     }
     let wants_gpu = args.backend.contains(&BenchBackend::Gpu);
-    let gpu = if wants_gpu {
-        match gpu::acquire(args.adapter.as_deref()) {
-            Ok(g) => Some(g),
-            Err(e) => {
-                eprintln!("error: --backend gpu: {e}");
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-        }
-    } else {
-        None
+    let gpu = match gpu_if(wants_gpu, args.adapter.as_deref()) {
+        Ok(g) => g,
+        Err(code) => return Ok(code),
     };
     let (w, h) = (reference.width as u32, reference.height as u32);
     let flat = FlatScene::build(&scene);

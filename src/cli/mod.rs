@@ -171,3 +171,17 @@ pub fn run() -> ExitCode {
         }
     }
 }
+
+/// The GPU for `--backend gpu` when `wanted`, or the exit status for a missing adapter.
+pub(crate) fn gpu_if(
+    wanted: bool,
+    adapter: Option<&str>,
+) -> Result<Option<hexray::gpu::Gpu>, ExitCode> {
+    if !wanted {
+        return Ok(None);
+    }
+    hexray::gpu::acquire(adapter).map(Some).map_err(|e| {
+        eprintln!("error: --backend gpu: {e}");
+        ExitCode::from(EXIT_BAD_INPUT)
+    })
+}

@@ -184,16 +184,11 @@ impl Bidirectional {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let vertex_size = std::mem::size_of::<LightVertex>() as u64;
+        // The splat tallies and per-pixel buffers in one binding each (the check `render` makes
+        // before any work, so a direct caller gets the same sentence).
+        super::render::check_image_fits(&limits, method, width, height)
+            .map_err(anyhow::Error::msg)?;
         let tallies_size = 4 * tally_words(pixels);
-        if tallies_size > max_binding || 16 * pixels > max_binding {
-            bail!(
-                "--method {method} at {width}x{height} needs {} MiB of splat tallies in one \
-                 binding, more than this GPU binds ({} MiB); render a smaller image, or use \
-                 --backend cpu",
-                tallies_size >> 20,
-                max_binding >> 20
-            );
-        }
         // The pool: room for the whole image at the first estimate, within what the device
         // binds (light tracing stores nothing). Grid entries are 16 bytes a vertex, the
         // vertices 80, so the vertices bound the pool.
