@@ -1,5 +1,5 @@
 // The film's side of the kernels: each pixel's samples of a pass added to its sums (folded into
-// f64 by the host after the pass, `src/film.rs`), and a running mean for a viewer.
+// f64 by the host after the pass, `src/film.rs`).
 
 fn max_element(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
@@ -12,25 +12,15 @@ fn is_finite(v: vec3<f32>) -> bool {
 }
 
 // Adds n finite samples (their sum and sum of squares) and `dropped` non-finite ones to pixel
-// (x, y)'s sums of the pass, and updates the running mean incrementally,
-// m += (Σx − k·m) / (n + k), which stays accurate in f32 at any sample count, then writes it to
-// the output texture.
+// (x, y)'s sums of the pass. The sums hold the image from row `frame.film_row` on (a film band).
 fn add_to_pixel(x: u32, y: u32, sum: vec3<f32>, sum_sq: vec3<f32>, n: f32, dropped: f32) {
-    let index = y * frame.camera.width + x;
+    let index = (y - frame.film_row) * frame.camera.width + x;
     var sums = pixel_sums[index];
     sums.sum += sum;
     sums.sum_sq += sum_sq;
     sums.n += n;
     sums.dropped += dropped;
     pixel_sums[index] = sums;
-
-    var mean = running_mean[index];
-    let total = mean.w + n;
-    if total > 0.0 {
-        mean = vec4<f32>(mean.xyz + (sum - n * mean.xyz) / total, total);
-    }
-    running_mean[index] = mean;
-    textureStore(output, vec2<u32>(x, y), vec4<f32>(mean.xyz, 1.0));
 }
 
 // The workgroup's iteration values, summed in a fixed tree before one atomic add to the

@@ -98,7 +98,8 @@ struct Frame {
     merge_vc: f32,
     // The merge kernel's normalisation 1 / (pi r^2 N).
     merge_normalization: f32,
-    pad: u32,
+    // The first image row the pass sums hold (path tracing's film bands; 0 otherwise).
+    film_row: u32,
 }
 
 const METHOD_PATH: u32 = 0u;
@@ -128,5 +129,3 @@ const F32_MAX: f32 = 3.40282347e38;
 // bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/render.rs).
 @group(0) @binding(6) var<uniform> frame: Frame;
 @group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;
-@group(0) @binding(8) var<storage, read_write> running_mean: array<vec4<f32>>;
-@group(0) @binding(9) var output: texture_storage_2d<rgba32float, write>;

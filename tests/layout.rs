@@ -112,7 +112,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merge_vm,
             merge_vc,
             merge_normalization,
-            pad
+            film_row
         }),
         rust_layout!(GridParams {
             min,

@@ -18,6 +18,7 @@ mod determinism;
 mod direct_light;
 mod furnace;
 mod fuzz_scenes;
+mod gpu_bands;
 mod gpu_furnace;
 mod gpu_lost;
 mod gpu_parity;

@@ -844,3 +844,17 @@ fn the_scene_sha1_covers_the_scene_file_and_each_mesh_file() {
         sha1_smol::Sha1::from(&bare).digest().to_string()
     );
 }
+
+/// A mesh file is read up to 1 GiB: one that never ends (/dev/zero) is refused, located at its
+/// `file`, after reading one byte past the limit, never until memory runs out.
+#[test]
+fn a_mesh_file_beyond_the_size_limit_is_refused_without_reading_it_all() {
+    let dir = temp_dir("endless");
+    let mut s = room();
+    s["meshes"] = json!([{ "file": "/dev/zero", "material": "white" }]);
+    let stderr = refused(&dir, &write_scene(&dir, "scene.json", &s));
+    assert!(
+        stderr.contains("meshes[0].file") && stderr.contains("is larger than 1024 MiB"),
+        "{stderr}"
+    );
+}

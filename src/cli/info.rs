@@ -44,7 +44,7 @@ pub(crate) fn mesh_lines(scene: &Scene) -> Vec<String> {
 pub(crate) fn scene_info(path: &Path) -> ExitCode {
     use std::io::Write;
     let started = std::time::Instant::now();
-    let scene = match Scene::load(path) {
+    let scene = match super::render::load_scene(path) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");

@@ -115,6 +115,23 @@ impl RenderArgs {
 /// The scene rendered when none is given.
 pub(crate) const DEFAULT_SCENE: &str = "scenes/tncg15_room.json";
 
+/// The default scene's file, built into the binary so that `hexray render` works from any
+/// folder.
+const DEFAULT_SCENE_JSON: &str = include_str!("../../scenes/tncg15_room.json");
+
+/// Loads a scene file; the default scene's path, where no such file is (hexray run outside its
+/// repository), gives the copy built into the binary: the same bytes, so the same SHA-1, and
+/// renders and resumes as the file would.
+pub(crate) fn load_scene(path: &Path) -> std::result::Result<Scene, hexray::scene::SceneError> {
+    if path == Path::new(DEFAULT_SCENE) && !path.exists() {
+        eprintln!(
+            "hexray: no {DEFAULT_SCENE} in this folder; rendering the copy built into hexray"
+        );
+        return Scene::from_json(DEFAULT_SCENE_JSON, path);
+    }
+    Scene::load(path)
+}
+
 /// The merge radius a command line asks for, or an error for the user (exit 2): `--radius` and
 /// `--alpha` only with a merging method, and sppm needs a radius above 0.
 pub(crate) fn merge_radius_of(
@@ -209,7 +226,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
     let method = args.method.unwrap_or(Method::DEFAULT);
     let scene_path = args.scene_path();
     // Everything that can be wrong with the input is found here, before any output exists.
-    let scene = match Scene::load(&scene_path) {
+    let scene = match load_scene(&scene_path) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");

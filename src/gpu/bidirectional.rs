@@ -592,7 +592,7 @@ impl GpuRenderer {
             Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
         );
         self.queue.submit([encoder.finish()]);
-        self.fold_sums(film)?;
+        self.fold_sums(film, 0)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_buffer(&b.tally_readback)?);
 
         let mut overflowed = Vec::new();

@@ -53,7 +53,9 @@ pub struct Frame {
     pub merge_vc: f32,
     /// The merge kernel's normalisation 1 / (π r² N) of the iteration.
     pub merge_normalization: f32,
-    pub pad: u32,
+    /// The first image row the pass sums buffer holds (path tracing's film bands; 0 for the
+    /// other methods, whose sums hold the whole image).
+    pub film_row: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -98,7 +100,10 @@ pub struct GpuRenderer {
     pub(super) frame_buffer: wgpu::Buffer,
     pub(super) sums: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
-    texture: wgpu::Texture,
+    /// Image rows per film band: the pass sums of path tracing cover this many rows at a time,
+    /// so that any image renders within the device's largest binding; the whole image for the
+    /// other methods (`check_image_fits`).
+    film_rows: u32,
     pub(super) frame: Frame,
     pub(super) method: Method,
     /// Light tracing and BDPT: their kernels and buffers.
@@ -187,41 +192,57 @@ pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
     ]
 }
 
+/// Bytes of one pixel's pass sums on the device.
+const PIXEL_SUMS_BYTES: u64 = std::mem::size_of::<PixelSums>() as u64;
+
+/// The largest buffer the device binds as storage.
+fn largest_binding(limits: &wgpu::Limits) -> u64 {
+    limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+}
+
 /// Whether the per-pixel buffers of a `width` x `height` render with `method` fit this device's
 /// largest storage binding; if not, a sentence for the user with the largest size that does.
-/// (The film buffers are not yet split into bands: above lavapipe's 128 MiB binding, about
-/// 2048 x 2048 for path tracing, the GPU backend refuses and the CPU backend renders.)
+/// Path tracing's pass sums are cut into bands of rows (`GpuRenderer::film_rows`), so any
+/// image whose single row fits renders. The methods that splat (light, bdpt, sppm, vcm) write
+/// to any pixel from any light subpath, so their tallies and sums hold the whole image in one
+/// binding each: above lavapipe's 128 MiB, about 1900 x 1900, they refuse and say what renders.
 pub fn check_image_fits(
     limits: &wgpu::Limits,
     method: Method,
     width: u32,
     height: u32,
 ) -> Result<(), String> {
-    let limit = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
-    let per_pixel = |pixels: u64| {
-        let mut largest = (pixels * std::mem::size_of::<PixelSums>() as u64).max(16 * pixels);
-        if method.splats() {
-            largest = largest.max(4 * super::bidirectional::tally_words(pixels));
+    let limit = largest_binding(limits);
+    if !method.splats() {
+        let row = width as u64 * PIXEL_SUMS_BYTES;
+        if row <= limit {
+            return Ok(());
         }
-        largest
+        return Err(format!(
+            "a {width}-pixel-wide row needs {row} bytes of pass sums, more than this adapter \
+             binds ({limit} bytes); render it with --backend cpu, or narrower"
+        ));
+    }
+    let largest = |pixels: u64| {
+        (pixels * PIXEL_SUMS_BYTES).max(4 * super::bidirectional::tally_words(pixels))
     };
     let pixels = width as u64 * height as u64;
-    if per_pixel(pixels) <= limit {
+    if largest(pixels) <= limit {
         return Ok(());
     }
     // The largest square image that fits, for the message.
     let mut side = 1u64;
-    while per_pixel((side + 1) * (side + 1)) <= limit {
+    while largest((side + 1) * (side + 1)) <= limit {
         side += 1;
     }
     Err(format!(
-        "a {width}x{height} render with --method {method} needs a {:.0} MiB film buffer, more \
-         than this adapter binds ({:.0} MiB; at most about {side}x{side} pixels); the GPU \
-         backend does not split the film yet: render it with --backend cpu, or at a smaller \
-         size",
-        per_pixel(pixels) as f64 / (1u64 << 20) as f64,
+        "a {width}x{height} render with --method {method} needs a {:.0} MiB splat buffer, more \
+         than this adapter binds ({:.0} MiB; at most about {side}x{side} pixels); on the GPU, \
+         --method path renders any size (its film is split into bands); or render it with \
+         --backend cpu, or at a smaller size",
+        largest(pixels) as f64 / (1u64 << 20) as f64,
         limit as f64 / (1u64 << 20) as f64
     ))
 }
@@ -234,12 +255,7 @@ pub fn check_scene_fits(
     scene: &FlatScene,
 ) -> Result<(), String> {
     let (limit, what) = match residency {
-        Residency::Storage => (
-            limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size),
-            "storage buffer binding",
-        ),
+        Residency::Storage => (largest_binding(limits), "storage buffer binding"),
         Residency::Uniform => (
             limits
                 .max_uniform_buffer_binding_size
@@ -320,7 +336,7 @@ pub(super) fn buffer_entries<'a>(
 }
 
 /// The bindings of `shaders/scene.wgsl`: the six scene arrays (storage or uniform), the frame
-/// (uniform), the pass sums and the running mean (read-write storage), the output texture.
+/// (uniform), the pass sums (read-write storage).
 fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindGroupLayout {
     let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
         binding,
@@ -340,17 +356,6 @@ fn bind_group_layout(device: &wgpu::Device, residency: Residency) -> wgpu::BindG
     let mut entries: Vec<_> = (0..6).map(|b| buffer(b, scene_array)).collect();
     entries.push(buffer(6, wgpu::BufferBindingType::Uniform));
     entries.push(buffer(7, read_write));
-    entries.push(buffer(8, read_write));
-    entries.push(wgpu::BindGroupLayoutEntry {
-        binding: 9,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format: wgpu::TextureFormat::Rgba32Float,
-            view_dimension: wgpu::TextureViewDimension::D2,
-        },
-        count: None,
-    });
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("scene"),
         entries: &entries,
@@ -373,7 +378,6 @@ impl GpuRenderer {
         // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
         check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
         let (width, height) = (camera.width, camera.height);
-        let pixels = (width as u64) * (height as u64);
         let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));
         {
             let lost = lost.clone();
@@ -455,14 +459,22 @@ impl GpuRenderer {
             merge_vm: 0.0,
             merge_vc: 0.0,
             merge_normalization: 0.0,
-            pad: 0,
+            film_row: 0,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
             contents: bytemuck::bytes_of(&frame),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let sums_size = pixels * std::mem::size_of::<PixelSums>() as u64;
+        // Path tracing's film bands: as many rows as one binding holds (`check_image_fits` has
+        // made sure a row fits, and for the other methods the whole image).
+        let film_rows = if method.splats() {
+            height
+        } else {
+            (largest_binding(&device.limits()) / (width as u64 * PIXEL_SUMS_BYTES))
+                .clamp(1, height as u64) as u32
+        };
+        let sums_size = film_rows as u64 * width as u64 * PIXEL_SUMS_BYTES;
         let sums = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("pixel sums"),
             size: sums_size,
@@ -477,27 +489,6 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let running_mean = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("running mean"),
-            size: pixels * 16,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("output"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
         let buffers = [
             upload(device, residency, "triangles", &scene.triangles),
             upload(device, residency, "spheres", &scene.spheres),
@@ -514,14 +505,6 @@ impl GpuRenderer {
         entries.push(wgpu::BindGroupEntry {
             binding: 7,
             resource: sums.as_entire_binding(),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 8,
-            resource: running_mean.as_entire_binding(),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 9,
-            resource: wgpu::BindingResource::TextureView(&view),
         });
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -540,7 +523,7 @@ impl GpuRenderer {
             frame_buffer,
             sums,
             readback,
-            texture,
+            film_rows,
             frame,
             method,
             bidirectional,
@@ -585,31 +568,58 @@ impl GpuRenderer {
         self.check_device()?;
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let start = Instant::now();
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.sums, 0, None);
-        self.queue.submit([encoder.finish()]);
+        // Film bands: the pass sums hold `film_rows` rows (the whole image unless it is larger
+        // than one binding); each band's samples are traced, read back and folded in turn.
+        let mut band_start = 0;
+        while band_start < h {
+            let band_end = (band_start + self.film_rows).min(h);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&self.sums, 0, None);
+            self.queue.submit([encoder.finish()]);
+            self.dispatch_band(first, count, band_start, band_end);
+            // Read the band's sums back and fold them into the film in f64.
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+            self.queue.submit([encoder.finish()]);
+            self.fold_sums(film, band_start)?;
+            band_start = band_end;
+        }
 
-        // Plan: as many samples of the whole image as fit the dispatch budget; if one sample
-        // of the whole image is too much, bands of rows (multiples of the workgroup height).
+        // Size the next dispatches from this pass's throughput.
         let image = (w as u64) * (h as u64);
-        let spp_per_dispatch = (self.paths_per_dispatch / image).clamp(1, count as u64) as u32;
-        let rows = if spp_per_dispatch > 1 || self.paths_per_dispatch >= image {
-            h
+        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
+        self.paths_per_dispatch =
+            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
+        Ok(())
+    }
+
+    /// Queues samples `first..first + count` of rows `band_start..band_end` (one film band) in
+    /// dispatches of about `paths_per_dispatch` paths: as many samples of the whole band as fit
+    /// the budget; if one sample of the band is too much, sub-bands of rows (multiples of the
+    /// workgroup height).
+    fn dispatch_band(&self, first: u32, count: u32, band_start: u32, band_end: u32) {
+        let w = self.frame.camera.width;
+        let band_pixels = (w as u64) * ((band_end - band_start) as u64);
+        let spp_per_dispatch =
+            (self.paths_per_dispatch / band_pixels).clamp(1, count as u64) as u32;
+        let rows = if spp_per_dispatch > 1 || self.paths_per_dispatch >= band_pixels {
+            band_end - band_start
         } else {
             let r = (self.paths_per_dispatch / w as u64).max(1) as u32;
-            (r.div_ceil(WORKGROUP) * WORKGROUP).min(h)
+            (r.div_ceil(WORKGROUP) * WORKGROUP).min(band_end - band_start)
         };
         let mut s = 0;
         while s < count {
             let k = spp_per_dispatch.min(count - s);
-            let mut y = 0;
-            while y < h {
-                let band = rows.min(h - y);
+            let mut y = band_start;
+            while y < band_end {
+                let rows = rows.min(band_end - y);
                 let frame = Frame {
                     first_sample: first + s,
                     sample_count: k,
                     tile_origin: [0, y],
-                    tile_size: [w, band],
+                    tile_size: [w, rows],
+                    film_row: band_start,
                     ..self.frame
                 };
                 // One submission per dispatch: the uniform write lands before this dispatch and
@@ -621,33 +631,30 @@ impl GpuRenderer {
                     let mut cpass = encoder.begin_compute_pass(&Default::default());
                     cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
                     cpass.set_bind_group(0, &self.bind_group, &[]);
-                    cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), band.div_ceil(WORKGROUP), 1);
+                    cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
                 }
                 self.queue.submit([encoder.finish()]);
-                y += band;
+                y += rows;
             }
             s += k;
         }
+    }
 
-        // Read the pass's sums back and fold them into the film in f64.
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
-        self.queue.submit([encoder.finish()]);
-        self.fold_sums(film)?;
-
-        // Size the next dispatches from this pass's throughput.
-        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
-        self.paths_per_dispatch =
-            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
-        Ok(())
+    /// Path tracing's rows per film band (tests: a band of a few rows exercises the split on a
+    /// small image). At least one row.
+    pub fn set_film_rows(&mut self, rows: u32) {
+        if !self.method.splats() {
+            self.film_rows = rows.clamp(1, self.frame.camera.height);
+        }
     }
 
     /// Reads the pass's sums back (copied to `readback` by the queued work) and folds them into
-    /// the film in f64.
-    pub(super) fn fold_sums(&self, film: &mut Film) -> Result<()> {
+    /// the film in f64, from row `first_row` on.
+    pub(super) fn fold_sums(&self, film: &mut Film, first_row: u32) -> Result<()> {
         let bytes = self.read_buffer(&self.readback)?;
         let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
-        for (p, s) in film.pixels.iter_mut().zip(&sums) {
+        let offset = first_row as usize * film.width as usize;
+        for (p, s) in film.pixels[offset..].iter_mut().zip(&sums) {
             for c in 0..3 {
                 p.sum[c] += s.sum[c] as f64;
                 p.sum_sq[c] += s.sum_sq[c] as f64;
@@ -678,49 +685,5 @@ impl GpuRenderer {
             .to_vec();
         buffer.unmap();
         Ok(bytes)
-    }
-
-    /// The running mean the kernel keeps in its storage texture (what a viewer would show),
-    /// copied out, row 0 at the top.
-    pub fn read_texture(&self) -> Result<Vec<[f32; 4]>> {
-        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
-        let row = (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("texture readback"),
-            size: (row * h) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        self.queue.submit([encoder.finish()]);
-        let bytes = self.read_buffer(&buffer)?;
-        let mut out = Vec::with_capacity((w * h) as usize);
-        for y in 0..h as usize {
-            let line = &bytes[y * row as usize..y * row as usize + w as usize * 16];
-            out.extend(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(line));
-        }
-        Ok(out)
     }
 }

@@ -18,6 +18,21 @@ use std::path::{Path, PathBuf};
 /// The largest scene file read (scene files are a few kB to a few MB).
 pub const MAX_SCENE_BYTES: u64 = 256 << 20;
 
+/// The largest mesh file read: 1 GiB is about 50 million triangles of binary PLY or 20 million
+/// of OBJ, beyond what 24 GiB holds once the BVH is built (140 bytes a triangle on the CPU).
+pub const MAX_MESH_BYTES: u64 = 1 << 30;
+
+/// At most `limit` bytes of a file, or None if it holds more: reads one byte past the limit, so
+/// /dev/zero or a huge file is refused without reading it all.
+fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= limit).then_some(bytes))
+}
+
 /// A scene that parsed and passed validation: everything the renderer needs, plus what the
 /// outputs record about where it came from.
 #[derive(Debug, Clone)]
@@ -83,16 +98,7 @@ impl Scene {
                 "check the path; the default scene is scenes/tncg15_room.json",
             )
         };
-        // Read at most one byte past the limit, so that /dev/zero or a huge file is refused
-        // without reading it all.
-        use std::io::Read;
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .map_err(unreadable)?
-            .take(MAX_SCENE_BYTES + 1)
-            .read_to_end(&mut bytes)
-            .map_err(unreadable)?;
-        if bytes.len() as u64 > MAX_SCENE_BYTES {
+        let Some(bytes) = read_bounded(path, MAX_SCENE_BYTES).map_err(unreadable)? else {
             return Err(error(
                 format!(
                     "the scene file is larger than {} MiB",
@@ -101,7 +107,7 @@ impl Scene {
                 "a scene file holds a camera, materials and a few primitives; is this the \
                  right file?",
             ));
-        }
+        };
         Self::from_json(Self::decode(&bytes, path)?, path)
     }
 
@@ -140,12 +146,25 @@ impl Scene {
                 help,
             };
             let mesh_path = folder.join(&m.file);
-            let bytes = std::fs::read(&mesh_path).map_err(|e| {
-                located(
-                    format!("cannot read the mesh file {}: {e}", mesh_path.display()),
-                    "the path is relative to the scene file's folder; check it".into(),
-                )
-            })?;
+            let bytes = read_bounded(&mesh_path, MAX_MESH_BYTES)
+                .map_err(|e| {
+                    located(
+                        format!("cannot read the mesh file {}: {e}", mesh_path.display()),
+                        "the path is relative to the scene file's folder; check it".into(),
+                    )
+                })?
+                .ok_or_else(|| {
+                    located(
+                        format!(
+                            "the mesh file {} is larger than {} MiB",
+                            mesh_path.display(),
+                            MAX_MESH_BYTES >> 20
+                        ),
+                        "simplify the mesh (hexray info shows what a mesh costs), or split it \
+                         into several files"
+                            .into(),
+                    )
+                })?;
             sha1.update(&bytes);
             let loaded = mesh::parse(&m.file, &bytes)
                 .and_then(|data| {
