@@ -222,7 +222,7 @@ fn cases() -> Vec<Case> {
 }
 
 fn hexray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hexray"))
+    Command::new(crate::common::hexray_bin())
         .args(args)
         .output()
         .expect("running hexray")

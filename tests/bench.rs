@@ -7,7 +7,7 @@ use std::process::Command;
 fn bench_writes_one_json_row_per_scene_and_backend() {
     let dir = std::env::temp_dir().join(format!("hexray-bench-{}", std::process::id()));
     let out = dir.join("bench.json");
-    let status = Command::new(env!("CARGO_BIN_EXE_hexray"))
+    let status = Command::new(crate::common::hexray_bin())
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(["bench", "scenes/cornell_box.json", "scenes/glass_room.json"])
         .args([

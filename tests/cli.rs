@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn hexray() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hexray"));
+    let mut c = Command::new(crate::common::hexray_bin());
     c.current_dir(env!("CARGO_MANIFEST_DIR"));
     c
 }
@@ -318,7 +318,7 @@ fn the_default_output_is_named_after_the_scene_file() {
     scene["name"] = serde_json::json!(format!("../../{escape}"));
     let copy = dir.join("copy.json");
     std::fs::write(&copy, scene.to_string()).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+    let o = Command::new(crate::common::hexray_bin())
         .current_dir(&dir)
         .arg("render")
         .arg(&copy)
@@ -359,7 +359,7 @@ fn a_scene_path_beyond_latin_1_is_recorded_in_the_exr() {
 #[test]
 fn the_default_scene_renders_from_any_folder() {
     let dir = temp_dir("elsewhere");
-    let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+    let o = Command::new(crate::common::hexray_bin())
         .current_dir(&dir)
         .args(["render", "--backend", "cpu", "--spp", "1"])
         .args(["--width", "8", "--height", "6", "--threads", "1"])

@@ -103,7 +103,7 @@ fn an_npy_and_an_exr_of_the_same_data_compare_equal() {
     let c = compare(&from_npy, &from_exr, None).unwrap();
     assert_eq!((c.rmse, c.ratio), (0.0, [1.0; 3]));
     // And through the CLI, machine-readable.
-    let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+    let o = Command::new(crate::common::hexray_bin())
         .args(["compare", "--json"])
         .arg(&npy)
         .arg(&exr)
@@ -121,7 +121,7 @@ fn images_of_different_sizes_are_a_clear_error() {
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     write_exr(&a, &image(16, 8), &Metadata::default()).unwrap();
     write_exr(&b, &image(8, 16), &Metadata::default()).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+    let o = Command::new(crate::common::hexray_bin())
         .current_dir(repo("."))
         .arg("compare")
         .arg(&a)
@@ -163,7 +163,7 @@ fn a_render_at_twice_the_size_compares_as_its_block_means() {
     write_exr(&b, &reference, &Metadata::default()).unwrap();
     let run = |a: &Path, big: &RgbImage| {
         write_exr(a, big, &Metadata::default()).unwrap();
-        let o = Command::new(env!("CARGO_BIN_EXE_hexray"))
+        let o = Command::new(crate::common::hexray_bin())
             .current_dir(repo("."))
             .args(["compare", "--json"])
             .arg(a)

@@ -15,7 +15,7 @@ fn curve_relmse_falls_with_spp_and_its_charts_decode() {
     let dir = std::env::temp_dir().join(format!("hexray-curve-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let hexray = || {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_hexray"));
+        let mut c = Command::new(crate::common::hexray_bin());
         c.current_dir(repo("."));
         c
     };

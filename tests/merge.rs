@@ -13,7 +13,7 @@ const SCENE: &str = "scenes/cornell_box.json";
 const SIZE: &str = "48";
 
 fn hexray() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hexray"));
+    let mut c = Command::new(crate::common::hexray_bin());
     c.current_dir(repo("."));
     c
 }
@@ -283,7 +283,7 @@ fn the_local_runner_script_equals_the_cli_by_hand() {
         .args([SCENE, "3", "8"])
         .arg(&by_script)
         .args(["--backend", "cpu", "--width", "24", "--height", "24"])
-        .env("HEXRAY", env!("CARGO_BIN_EXE_hexray"))
+        .env("HEXRAY", crate::common::hexray_bin())
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

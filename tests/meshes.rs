@@ -283,7 +283,7 @@ fn a_rotation_moves_the_mesh_bounds_where_the_closed_form_says() {
 }
 
 fn hexray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hexray"))
+    Command::new(crate::common::hexray_bin())
         .args(args)
         .output()
         .expect("running hexray")

@@ -26,9 +26,18 @@ pub fn repo(rel: &str) -> PathBuf {
     }
 }
 
+/// The `hexray` binary the command-line tests run: this build's, or the one named by
+/// `HEXRAY_UNDER_TEST`, so the same tests can be run against an older build to show which of
+/// them fail there (`tests/against_build.sh`).
+pub fn hexray_bin() -> PathBuf {
+    std::env::var_os("HEXRAY_UNDER_TEST")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_hexray")))
+}
+
 /// The `hexray` binary, run in the repository root.
 pub fn hexray_command() -> std::process::Command {
-    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hexray"));
+    let mut c = std::process::Command::new(hexray_bin());
     c.current_dir(repo("."));
     c
 }
