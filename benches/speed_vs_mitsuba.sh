@@ -28,13 +28,13 @@ trap 'rm -rf "$work"' EXIT
 
 run_hexray() { # NAME ROUND
     "$hexray" bench "scenes/$1.json" --backend cpu --method path --spp "$spp" \
-        --threads "$threads" --out "$work/h.json" > /dev/null
-    python3 -c 'import json,sys; r=json.load(open(sys.argv[1]))["rows"][0]; print(f"{sys.argv[2]},{sys.argv[3]},hexray,{r["seconds"]:.4f},{r["camera_paths_per_second"]:.0f}")' \
+        --threads "$threads" --out "$work/h.json" > /dev/null 2>&1
+    python3 -c "import json,sys; r=json.load(open(sys.argv[1]))['rows'][0]; print('%s,%s,hexray,%.4f,%.0f' % (sys.argv[2], sys.argv[3], r['seconds'], r['camera_paths_per_second']))" \
         "$work/h.json" "$1" "$2"
 }
 run_mitsuba() { # NAME ROUND
     "$python" "$side" time "scenes/$1.json" --res 256 --spp "$spp" --repeat 1 |
-        python3 -c 'import json,sys; r=json.loads(sys.stdin.read()); print(f"{sys.argv[1]},{sys.argv[2]},mitsuba,{r["seconds"]:.4f},{r["paths_per_s"]}")' "$1" "$2"
+        python3 -c "import json,sys; r=json.loads(sys.stdin.read()); print('%s,%s,mitsuba,%.4f,%d' % (sys.argv[1], sys.argv[2], r['seconds'], r['paths_per_s']))" "$1" "$2"
 }
 
 echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; hexray $(git rev-parse --short HEAD), $spp spp, 256x256, $threads threads"

@@ -31,8 +31,12 @@ fn visibility(a_p: vec3<f32>, a_err: vec3<f32>, a_n: vec3<f32>, b_p: vec3<f32>, 
 }
 
 // The radiance that one camera subpath of pixel (x, y) gathers by the strategies with t >= 2,
-// connecting to light subpath `path` of the pool; the pixel traces n_c of them.
-fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> vec3<f32> {
+// connecting to light subpath `path` of the pool; the pixel traces n_c of them. `own`: the pool
+// holds this pixel's light subpath (this wave traced it). A merging iteration too large for one
+// pool runs in waves, each followed by a camera pass over every pixel: a pixel takes emission,
+// next-event estimation and its connections in its own wave, and merges with each wave's
+// photons, so that over the waves it takes every strategy once, as in one wave.
+fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own: bool) -> vec3<f32> {
     let n_paths = f32(frame.n_light_paths);
     let max_edges = max_path_edges();
     // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole; its
@@ -66,7 +70,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
         // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
         // light point taken by next-event estimation or by a light subpath (SPPM meets it
         // only through mirrors and glass, where nothing else can: weight 1).
-        if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
+        if own && material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
             let pdf_area = emitter_pdf_area(hit.prim);
             var w = 1.0;
             if connects() {
@@ -96,7 +100,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             let wi = to_light / sqrt(dist2);
             let cos_l = -dot(ls.n, wi);
             let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
-            if connects() && depth < max_edges && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+            if own && connects() && depth < max_edges && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                 let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
                 let w = weight_next_event(m, iteration_merge(), bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
@@ -107,7 +111,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
             // Step 5 - connections (s >= 2): to each vertex of this pixel's light subpath, one
             // shadow ray each; the contribution is beta f_c G f_l alpha, weighted against every
             // other strategy on both sides.
-            var k = select(NO_VERTEX, atomicLoad(&tallies[path_head(path)]), connects());
+            var k = select(NO_VERTEX, atomicLoad(&tallies[path_head(path)]), own && connects());
             var i = 0u;
             while k != NO_VERTEX {
                 let v = light_vertices[k];
@@ -211,8 +215,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32) -> v
 
 // One invocation per pixel of the dispatch's tile, for one iteration: the pixel's camera
 // subpath, connected to the light subpath of the same index, which the light pass of this wave
-// has just traced. Its radiance waits in `camera_radiance` for the resolve pass, which adds the
-// splats. The light vertices the wave asked for are recorded in the iteration's image cell: if
+// has just traced (light subpaths frame.path_origin .. + frame.path_count). Its radiance waits in
+// `camera_radiance` for the resolve pass, which adds the splats: stored by the pixel's first
+// camera pass of the iteration, added to by the later waves of a merging iteration. The light vertices the wave asked for are recorded in the iteration's image cell: if
 // they overflowed the pool, the resolve pass drops the iteration and the host traces it again.
 @compute @workgroup_size(8, 8, 1)
 fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
@@ -229,10 +234,16 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     // The pixel's n_c camera subpaths, averaged; the k-th draws the streams of pixel
     // index + k N (a camera subpath's own blocks there: light subpaths stop at N).
     let n_c = camera_radiance[index].w;
+    let own = index >= frame.path_origin && index - frame.path_origin < frame.path_count;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
         let sampler = Sampler(frame.seed, index + k * frame.n_light_paths, frame.first_sample);
-        radiance += trace_camera_path(x, y, n_c, sampler, index);
+        radiance += trace_camera_path(x, y, n_c, sampler, index, own);
     }
-    camera_radiance[index] = vec4<f32>(radiance / n_c, n_c);
+    // BDPT's waves each cover their own pixels; a merging iteration's first wave covers all.
+    var before = vec3<f32>(0.0);
+    if merges() && frame.path_origin > 0u {
+        before = camera_radiance[index].xyz;
+    }
+    camera_radiance[index] = vec4<f32>(before + radiance / n_c, n_c);
 }

@@ -21,7 +21,10 @@
 //!
 //! Light subpaths are stored whole, however long: on the CPU as a slice per subpath, on the GPU
 //! in a pool that a wave of subpaths may overflow (the iteration is then traced again in smaller
-//! waves). No strategy is ever missing from the weights for want of storage.
+//! waves). No strategy is ever missing from the weights for want of storage. The CPU holds a
+//! merging iteration's photons at once; the GPU, when they outgrow its pool, merges wave by
+//! wave and takes the other strategies in the pixel's own wave (`own` in `shaders/bdpt.wgsl`),
+//! which sums to the same estimate.
 
 use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
 use crate::bvh::{intersect_closest, occluded};

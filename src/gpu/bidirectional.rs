@@ -16,11 +16,15 @@
 //! exactly the iteration it would have had. Light subpaths are therefore never cut short and no
 //! strategy ever leaves the MIS weights for want of storage.
 //!
-//! The merging methods (SPPM, VCM) need every light vertex of the iteration before any camera
-//! subpath, so they trace one wave of all rows, then build the hash grid of the vertices in
-//! dispatches (`shaders/hash_grid.wgsl`: setup, count, scan, scatter, sort), then run the camera
-//! pass. An iteration that overflows the pool is traced again after the pool has grown; one
-//! that cannot fit in what the device binds ends the render with a clear error.
+//! The merging methods (SPPM, VCM) merge with every light vertex of the iteration, so after a
+//! wave's light subpaths they build the hash grid of its vertices in dispatches
+//! (`shaders/hash_grid.wgsl`: setup, count, scan, scatter, sort) and run the camera pass over
+//! the whole image: each pixel merges with the wave's photons, and takes emission, next-event
+//! estimation and its connections in the wave that traced its own light subpath. Summed over
+//! the waves, that is every strategy once, as in one wave (the merges are summed in another
+//! order, so a multi-wave iteration equals the CPU's to f32 rounding, not bit for bit). An
+//! iteration that overflows the pool is traced again after the pool has grown, up to what the
+//! device binds; beyond that, in more waves: each costs a camera pass, but any iteration fits.
 
 use super::render::{
     buffer_entries, compute_pipeline, Frame, GpuRenderer, MAX_PASS_SPP, WORKGROUP,
@@ -277,6 +281,27 @@ impl Bidirectional {
 }
 
 impl GpuRenderer {
+    /// Tests: at most `vertices` light vertices in the pool (as if the device bound no more),
+    /// so that a small image needs several waves.
+    pub fn set_max_light_vertices(&mut self, vertices: u32) {
+        let b = self
+            .bidirectional
+            .as_mut()
+            .expect("a method with light subpaths");
+        b.max_capacity = vertices.max(1);
+        if b.capacity > b.max_capacity {
+            b.capacity = b.max_capacity;
+            b.pool = Pool::new(
+                &self.device,
+                &b.layout,
+                b.capacity,
+                &b.tallies,
+                &b.camera_radiance,
+            );
+        }
+        self.frame.vertex_capacity = b.capacity;
+    }
+
     /// What the method chose or met (`Backend::provenance`): for BDPT its τ and n_c, and the
     /// iterations traced again after a wave overflowed the light-vertex pool.
     pub fn provenance(&self) -> Vec<(&'static str, String)> {
@@ -524,13 +549,12 @@ impl GpuRenderer {
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let pixels = w as u64 * h as u64;
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
-        // Rows per wave: as many as the pool holds at the measured vertices per subpath (all
-        // of them when merging, which needs every light vertex of the iteration).
-        let wave_rows = if b.merging.is_some() {
-            h
-        } else {
-            ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h)
-        };
+        // Rows per wave: as many as the pool holds at the measured vertices per subpath. A
+        // merging iteration needs every light vertex of the iteration, so each of its waves is
+        // followed by a camera pass over the whole image (merges with that wave's photons; the
+        // other strategies in the pixel's own wave); one wave when the pool holds them all.
+        let merging = b.merging.as_ref().is_some_and(|m| m.radius.initial > 0.0);
+        let wave_rows = ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h);
 
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.sums, 0, None);
@@ -570,10 +594,17 @@ impl GpuRenderer {
                         encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(pixels), Some(4));
                         self.queue.submit([encoder.finish()]);
                         self.light_dispatches(&frame, y * w, (y1 - y) * w);
-                        if radius > 0.0 {
-                            self.build_grid(&frame, radius);
+                        let wave = Frame {
+                            path_origin: y * w,
+                            path_count: (y1 - y) * w,
+                            ..frame
+                        };
+                        if merging {
+                            self.build_grid(&wave, radius);
+                            self.row_dispatches(camera, &wave, 0, h);
+                        } else {
+                            self.row_dispatches(camera, &wave, y, y1);
                         }
-                        self.row_dispatches(camera, &frame, y, y1);
                         y = y1;
                     }
                 }
@@ -621,17 +652,16 @@ impl GpuRenderer {
 
         // Size the next waves and dispatches from what this pass measured.
         let b = self.bidirectional.as_mut().expect("light subpath buffers");
-        if b.merging.is_some() && !overflowed.is_empty() {
-            // One wave must hold the iteration: grow the pool and its grid, or give up.
+        if !overflowed.is_empty() {
             b.retraced += overflowed.len() as u64;
-            if most_asked > b.max_capacity {
-                bail!(
-                    "{}: one iteration's {most_asked} light vertices exceed what this GPU binds \
-                     in one buffer ({} vertices); render a smaller image, or use --backend cpu",
-                    self.method,
-                    b.max_capacity
-                );
-            }
+        }
+        if b.camera_pipeline.is_some() {
+            let asked_per_path = most_asked as f64 / (wave_rows as f64 * w as f64);
+            b.vertices_per_path = (1.25 * asked_per_path).max(0.5);
+        }
+        if merging && !overflowed.is_empty() && b.capacity < b.max_capacity {
+            // One wave is cheapest (every further wave is a camera pass over the whole image):
+            // grow the pool and its grid first, up to what the device binds.
             b.capacity = ((most_asked as u64 * 5 / 4).max(2 * b.capacity as u64))
                 .min(b.max_capacity as u64) as u32;
             b.pool = Pool::new(
@@ -641,20 +671,13 @@ impl GpuRenderer {
                 &b.tallies,
                 &b.camera_radiance,
             );
-        } else if b.camera_pipeline.is_some() && b.merging.is_none() {
-            let asked_per_path = most_asked as f64 / (wave_rows as f64 * w as f64);
-            b.vertices_per_path = (1.25 * asked_per_path).max(0.5);
-            if !overflowed.is_empty() {
-                b.retraced += overflowed.len() as u64;
-                if wave_rows == 1 {
-                    bail!(
-                        "BDPT: one row of {w} light subpaths stored {most_asked} vertices, more than \
-                         the GPU's vertex pool holds ({}); render a narrower image, or use \
-                         --backend cpu",
-                        b.capacity
-                    );
-                }
-            }
+        } else if !overflowed.is_empty() && wave_rows == 1 {
+            bail!(
+                "{}: one row of {w} light subpaths stored {most_asked} vertices, more than the \
+                 GPU's vertex pool holds ({}); render a narrower image, or use --backend cpu",
+                self.method,
+                b.capacity
+            );
         }
         let landed = (iterations.len() - overflowed.len()) as u64;
         if landed > 0 {
