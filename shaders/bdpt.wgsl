@@ -233,7 +233,7 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     let index = y * frame.camera.width + x;
     // The pixel's n_c camera subpaths, averaged; the k-th draws the streams of pixel
     // index + k N (a camera subpath's own blocks there: light subpaths stop at N).
-    let n_c = camera_radiance[index].w;
+    let n_c = camera_radiance[band_index(index)].w;
     let own = index >= frame.path_origin && index - frame.path_origin < frame.path_count;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
@@ -243,7 +243,7 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     // BDPT's waves each cover their own pixels; a merging iteration's first wave covers all.
     var before = vec3<f32>(0.0);
     if merges() && frame.path_origin > 0u {
-        before = camera_radiance[index].xyz;
+        before = camera_radiance[band_index(index)].xyz;
     }
-    camera_radiance[index] = vec4<f32>(before + radiance / n_c, n_c);
+    camera_radiance[band_index(index)] = vec4<f32>(before + radiance / n_c, n_c);
 }

@@ -14,13 +14,23 @@ fn is_finite(v: vec3<f32>) -> bool {
 // Adds n finite samples (their sum and sum of squares) and `dropped` non-finite ones to pixel
 // (x, y)'s sums of the pass. The sums hold the image from row `frame.film_row` on (a film band).
 fn add_to_pixel(x: u32, y: u32, sum: vec3<f32>, sum_sq: vec3<f32>, n: f32, dropped: f32) {
-    let index = (y - frame.film_row) * frame.camera.width + x;
+    let index = band_index(y * frame.camera.width + x);
     var sums = pixel_sums[index];
     sums.sum += sum;
     sums.sum_sq += sum_sq;
     sums.n += n;
     sums.dropped += dropped;
     pixel_sums[index] = sums;
+}
+
+// Whether image row y is in the film band.
+fn in_film_band(y: u32) -> bool {
+    return y >= frame.film_row && y - frame.film_row < frame.film_rows;
+}
+
+// Pixel `index`'s place in the band buffers (pass sums, splat cells, camera radiance).
+fn band_index(index: u32) -> u32 {
+    return index - frame.film_row * frame.camera.width;
 }
 
 // The workgroup's iteration values, summed in a fixed tree before one atomic add to the
@@ -41,10 +51,10 @@ fn resolve_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         let x = frame.tile_origin.x + gid.x;
         let y = frame.tile_origin.y + gid.y;
         let index = y * frame.camera.width + x;
-        let splat = splat_take(splat_cell(index));
+        let splat = splat_take(splat_cell(band_index(index)));
         var l = splat.rgb;
         if frame.method != METHOD_LIGHT {
-            l += camera_radiance[index].xyz;
+            l += camera_radiance[band_index(index)].xyz;
         }
         if !overflowed {
             // A non-finite sample, or an overflowed splat sum, is counted and dropped.

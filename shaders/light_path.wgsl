@@ -22,9 +22,9 @@ fn splat_importance(r: Raster) -> f32 {
     return r.importance;
 }
 
-// n_c of pixel `index`, kept in the fourth lane of its camera radiance.
+// n_c of pixel `index` (in the film band), kept in the fourth lane of its camera radiance.
 fn camera_subpaths(index: u32) -> f32 {
-    return camera_radiance[index].w;
+    return camera_radiance[band_index(index)].w;
 }
 
 // Splats `value` into `pixel` if the surface point p sees the eye, tracing the visibility ray
@@ -37,7 +37,7 @@ fn splat(pixel: u32, p: vec3<f32>, p_err: vec3<f32>, n: vec3<f32>, value: vec3<f
     let eye = frame.camera.eye;
     let origin = offset_ray_origin(p, p_err, n, eye - p);
     if !occluded(Ray(origin, eye - origin), 1.0) {
-        splat_add(splat_cell(pixel), value / q);
+        splat_add(splat_cell(band_index(pixel)), value / q);
     }
 }
 
@@ -83,7 +83,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     // importance and the geometry term toward the eye, against the camera subpaths that
     // hit the emitter there (s = 0).
     let r = camera_raster(camera, light.p);
-    if r.seen && splats_to_camera {
+    if r.seen && splats_to_camera && in_film_band(r.y) {
         let cos_l = -dot(light.n, r.dir);
         if cos_l > 0.0 && 1u <= max_path_edges() {
             let pixel = r.y * camera.width + r.x;
@@ -142,7 +142,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
             // Step 5 - connect to the camera (t = 1): splat alpha f W |cos| / dist^2 / N into
             // the pixel that sees the vertex.
             let rv = camera_raster(camera, hit.p);
-            if rv.seen && splats_to_camera {
+            if rv.seen && splats_to_camera && in_film_band(rv.y) {
                 let bsdf = eval_diffuse(material.color, n_facing, wo, -rv.dir);
                 if bsdf.pdf > 0.0 && length < max_path_edges() {
                     let pixel = rv.y * camera.width + rv.x;

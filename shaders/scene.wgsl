@@ -98,8 +98,14 @@ struct Frame {
     merge_vc: f32,
     // The merge kernel's normalisation 1 / (pi r^2 N).
     merge_normalization: f32,
-    // The first image row the pass sums hold (path tracing's film bands; 0 otherwise).
+    // The film band: its first row and rows (pass sums; splat tallies and camera radiance).
     film_row: u32,
+    film_rows: u32,
+    // Pixels the band buffers hold.
+    band_pixels: u32,
+    // The first light subpath of the wave (the pool's path heads are the wave's).
+    wave_origin: u32,
+    pad: u32,
 }
 
 const METHOD_PATH: u32 = 0u;

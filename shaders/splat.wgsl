@@ -3,11 +3,13 @@
 // with a carry, so a sum does not depend on the order the splats arrive in, and equals the CPU's
 // for the same splats bit for bit.
 //
-// The words of `tallies` (group 1, binding 1), for P pixels and the pass's MAX_PASS_SPP
-// iteration slots: a cell of CELL_WORDS words per pixel (its splats), then a cell per slot (that
-// iteration's image sum, and in its last word the most light vertices a wave of it asked for),
-// then the light-vertex counter of the current wave, then the first stored vertex of each light
-// subpath. A cell is (lo, hi) for red, green and blue, then an overflow flag, then a spare word.
+// The words of `tallies` (group 1, binding 1), for the P pixels of the film band
+// (`frame.band_pixels`: the whole image unless it is larger than one binding) and the pass's
+// MAX_PASS_SPP iteration slots: a cell of CELL_WORDS words per pixel of the band (its splats),
+// then a cell per slot (that iteration's image sum over every band, and in its last word the
+// most light vertices a wave of it asked for), then the light-vertex counter of the current wave,
+// then the first stored vertex of each light subpath of the wave (at most P). A cell is (lo, hi)
+// for red, green and blue, then an overflow flag, then a spare word.
 
 const FRACTION_BITS: u32 = 24u;
 // 2^FRACTION_BITS.
@@ -19,28 +21,29 @@ const CELL_VERTICES: u32 = 7u;
 // Iterations per pass (`MAX_PASS_SPP` in src/gpu/render.rs).
 const MAX_PASS_SPP: u32 = 64u;
 
-fn pixel_count() -> u32 {
-    return frame.camera.width * frame.camera.height;
+// Pixels the band's splat cells cover.
+fn band_pixels() -> u32 {
+    return frame.band_pixels;
 }
 
-// The first word of pixel `index`'s splat cell.
+// The first word of the splat cell of the band's pixel `index` (`band_index`).
 fn splat_cell(index: u32) -> u32 {
     return index * CELL_WORDS;
 }
 
 // The first word of iteration slot `slot`'s image-sum cell.
 fn image_cell(slot: u32) -> u32 {
-    return (pixel_count() + slot) * CELL_WORDS;
+    return (band_pixels() + slot) * CELL_WORDS;
 }
 
 // The light vertices allocated so far in the current wave (cleared by the host before each).
 fn vertex_counter() -> u32 {
-    return (pixel_count() + MAX_PASS_SPP) * CELL_WORDS;
+    return (band_pixels() + MAX_PASS_SPP) * CELL_WORDS;
 }
 
 // The first stored vertex of light subpath `path`.
 fn path_head(path: u32) -> u32 {
-    return (pixel_count() + MAX_PASS_SPP) * CELL_WORDS + 1u + path;
+    return (band_pixels() + MAX_PASS_SPP) * CELL_WORDS + 1u + (path - frame.wave_origin);
 }
 
 struct Fixed {

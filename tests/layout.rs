@@ -112,7 +112,11 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merge_vm,
             merge_vc,
             merge_normalization,
-            film_row
+            film_row,
+            film_rows,
+            band_pixels,
+            wave_origin,
+            pad
         }),
         rust_layout!(GridParams {
             min,

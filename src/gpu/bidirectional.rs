@@ -90,6 +90,13 @@ pub struct Bidirectional {
     tally_readback: wgpu::Buffer,
     /// Light vertices the pool holds.
     pub capacity: u32,
+    /// Rows and pixels of a film band: the splat tallies, pass sums and camera radiance hold one
+    /// band; an image larger than one binding is rendered band by band (`run_iterations`).
+    pub(super) band_rows: u32,
+    pub(super) band_pixels: u64,
+    /// Each pixel's camera radiance lanes at the start of an iteration, (0, 0, 0, n_c), for
+    /// images of several bands (the camera radiance buffer holds one band's).
+    n_c: Vec<[f32; 4]>,
     /// Light vertices per light subpath, as measured (with a margin), for sizing waves.
     vertices_per_path: f64,
     /// Iterations traced again after a wave overflowed the pool.
@@ -107,6 +114,18 @@ fn vertex_counter_word(pixels: u64) -> u64 {
 }
 pub(crate) fn tally_words(pixels: u64) -> u64 {
     vertex_counter_word(pixels) + 1 + pixels
+}
+
+/// Rows per film band of the methods that splat: as many as keep the tallies (a splat cell and
+/// a path head per pixel), the pass sums and the camera radiance of the band each within one
+/// binding of `limit` bytes; the whole image if it fits, None if not even one row does.
+pub(crate) fn splat_band_rows(limit: u64, width: u32, height: u32) -> Option<u32> {
+    let fixed = 4 * tally_words(0);
+    let per_pixel = (4 * (tally_words(1) - tally_words(0)))
+        .max(std::mem::size_of::<super::render::PixelSums>() as u64)
+        .max(16);
+    let rows = limit.saturating_sub(fixed) / (per_pixel * width as u64);
+    (rows > 0).then(|| rows.min(height as u64) as u32)
 }
 
 /// A storage buffer that copies can also read and write.
@@ -192,7 +211,9 @@ impl Bidirectional {
         // before any work, so a direct caller gets the same sentence).
         super::render::check_image_fits(&limits, method, width, height)
             .map_err(anyhow::Error::msg)?;
-        let tallies_size = 4 * tally_words(pixels);
+        let band_rows = splat_band_rows(max_binding, width, height).unwrap_or(1);
+        let band_pixels = band_rows as u64 * width as u64;
+        let tallies_size = 4 * tally_words(band_pixels);
         // The pool: room for the whole image at the first estimate, within what the device
         // binds (light tracing stores nothing). Grid entries are 16 bytes a vertex, the
         // vertices 80, so the vertices bound the pool.
@@ -221,7 +242,7 @@ impl Bidirectional {
         };
         let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera radiance"),
-            contents: bytemuck::cast_slice(&n_c),
+            contents: bytemuck::cast_slice(&n_c[..band_pixels as usize]),
             // Copies for the tests' grid check (`GpuRenderer::grid_check`).
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
@@ -273,6 +294,10 @@ impl Bidirectional {
             max_capacity,
             tally_readback,
             capacity,
+            band_rows,
+            band_pixels,
+            // For images of several bands (each uploads its own).
+            n_c,
             vertices_per_path: FIRST_VERTICES_PER_PATH,
             retraced: 0,
             specular_pixels,
@@ -419,8 +444,8 @@ impl GpuRenderer {
         queries: &[glam::Vec3],
         radius: f32,
     ) -> Result<(crate::hash_grid::HashGrid, Vec<[u32; 3]>)> {
-        let pixels = self.frame.camera.width as u64 * self.frame.camera.height as u64;
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        let pixels = b.band_pixels;
         let Some(m) = b.merging.as_ref() else {
             bail!("the grid check needs a merging method");
         };
@@ -549,81 +574,107 @@ impl GpuRenderer {
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let pixels = w as u64 * h as u64;
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
-        // Rows per wave: as many as the pool holds at the measured vertices per subpath. A
-        // merging iteration needs every light vertex of the iteration, so each of its waves is
-        // followed by a camera pass over the whole image (merges with that wave's photons; the
-        // other strategies in the pixel's own wave); one wave when the pool holds them all.
+        let band_pixels = b.band_pixels;
+        // Rows per wave: as many as the pool holds at the measured vertices per subpath, and at
+        // most a band's (the pool's path heads are a band's). A merging iteration needs every
+        // light vertex of the iteration, so each of its waves is followed by a camera pass over
+        // the whole band (merges with that wave's photons; the other strategies in the pixel's
+        // own wave); one wave when the pool holds them all. Light tracing stores nothing.
         let merging = b.merging.as_ref().is_some_and(|m| m.radius.initial > 0.0);
-        let wave_rows = ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, h);
+        let wave_rows = if b.camera_pipeline.is_none() {
+            b.band_rows
+        } else {
+            ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, b.band_rows)
+        };
 
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.sums, 0, None);
         encoder.clear_buffer(
             &b.tallies,
-            4 * image_cells_word(pixels),
+            4 * image_cells_word(band_pixels),
             Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
         );
         self.queue.submit([encoder.finish()]);
-        for (slot, &s) in iterations.iter().enumerate() {
-            // Merging's radius this iteration, its constants in the MIS weights and the
-            // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
-            let radius = b.merging.as_ref().map_or(0.0, |m| m.radius.at(s));
-            let merge = MergeMis::new(radius, pixels as u32, self.method.connects());
-            let ball = b.merging.as_ref().is_some_and(|m| m.ball_kernel);
-            let normalization = kernel_normalization(radius, pixels as u32, ball);
-            let frame = Frame {
-                first_sample: s,
-                sample_count: 1,
-                slot: slot as u32,
-                vertex_capacity: b.capacity,
-                merge_vm: merge.vm,
-                merge_vc: merge.vc,
-                merge_normalization: normalization,
-                ..self.frame
-            };
-            match &b.camera_pipeline {
-                // Light tracing: every light subpath, then the resolve pass.
-                None => self.light_dispatches(&frame, 0, w * h),
-                // BDPT: wave by wave, the light subpaths of a band of rows, then its pixels'
-                // camera subpaths, with the pool's counter cleared before each wave.
-                Some(camera) => {
-                    let mut y = 0;
-                    while y < h {
-                        let y1 = (y + wave_rows).min(h);
-                        let mut encoder = self.device.create_command_encoder(&Default::default());
-                        encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(pixels), Some(4));
-                        self.queue.submit([encoder.finish()]);
-                        self.light_dispatches(&frame, y * w, (y1 - y) * w);
-                        let wave = Frame {
-                            path_origin: y * w,
-                            path_count: (y1 - y) * w,
-                            ..frame
-                        };
+        // Film bands: the image, unless its tallies are larger than one binding. Every band
+        // traces every light subpath of the iteration (splatting only into the band), so each
+        // band's pixels get the whole estimate, and the iteration's image sum gathers all bands.
+        let mut band_start = 0;
+        while band_start < h {
+            let band_end = (band_start + b.band_rows).min(h);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&self.sums, 0, None);
+            self.queue.submit([encoder.finish()]);
+            if b.band_rows < h {
+                let a = (band_start * w) as usize;
+                let z = (band_end * w) as usize;
+                self.queue
+                    .write_buffer(&b.camera_radiance, 0, bytemuck::cast_slice(&b.n_c[a..z]));
+            }
+            for (slot, &s) in iterations.iter().enumerate() {
+                // Merging's radius this iteration, its constants in the MIS weights and the
+                // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
+                let radius = b.merging.as_ref().map_or(0.0, |m| m.radius.at(s));
+                let merge = MergeMis::new(radius, pixels as u32, self.method.connects());
+                let ball = b.merging.as_ref().is_some_and(|m| m.ball_kernel);
+                let normalization = kernel_normalization(radius, pixels as u32, ball);
+                let frame = Frame {
+                    first_sample: s,
+                    sample_count: 1,
+                    slot: slot as u32,
+                    vertex_capacity: b.capacity,
+                    merge_vm: merge.vm,
+                    merge_vc: merge.vc,
+                    merge_normalization: normalization,
+                    film_row: band_start,
+                    film_rows: band_end - band_start,
+                    band_pixels: band_pixels as u32,
+                    ..self.frame
+                };
+                // Wave by wave: the light subpaths of a band of rows (with the pool's counter
+                // cleared before each), then the camera subpaths: BDPT's of the wave's pixels in
+                // the film band, a merging method's of the whole film band.
+                let mut y = 0;
+                while y < h {
+                    let y1 = (y + wave_rows).min(h);
+                    let wave = Frame {
+                        path_origin: y * w,
+                        path_count: (y1 - y) * w,
+                        wave_origin: y * w,
+                        ..frame
+                    };
+                    let mut encoder = self.device.create_command_encoder(&Default::default());
+                    encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(band_pixels), Some(4));
+                    self.queue.submit([encoder.finish()]);
+                    self.light_dispatches(&wave, y * w, (y1 - y) * w);
+                    if let Some(camera) = &b.camera_pipeline {
                         if merging {
                             self.build_grid(&wave, radius);
-                            self.row_dispatches(camera, &wave, 0, h);
-                        } else {
-                            self.row_dispatches(camera, &wave, y, y1);
+                            self.row_dispatches(camera, &wave, band_start, band_end);
+                        } else if y.max(band_start) < y1.min(band_end) {
+                            self.row_dispatches(camera, &wave, y.max(band_start), y1.min(band_end));
                         }
-                        y = y1;
                     }
+                    y = y1;
                 }
+                self.row_dispatches(&b.resolve_pipeline, &frame, band_start, band_end);
             }
-            self.row_dispatches(&b.resolve_pipeline, &frame, 0, h);
+            // Read back the band's pixel sums and fold them into the film.
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+            self.queue.submit([encoder.finish()]);
+            self.fold_sums(film, band_start, band_end - band_start)?;
+            band_start = band_end;
         }
 
-        // Read back the pixel sums and the iterations' image cells.
+        // Read back the iterations' image cells.
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
         encoder.copy_buffer_to_buffer(
             &b.tallies,
-            4 * image_cells_word(pixels),
+            4 * image_cells_word(band_pixels),
             &b.tally_readback,
             0,
             Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
         );
         self.queue.submit([encoder.finish()]);
-        self.fold_sums(film, 0)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_buffer(&b.tally_readback)?);
 
         let mut overflowed = Vec::new();

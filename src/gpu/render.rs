@@ -16,7 +16,8 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
-/// which tile, the method and its light pass, and the test-only faults. Nine vec4s.
+/// which tile, the method and its light pass, the film band, and the test-only faults. Ten
+/// vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Frame {
@@ -53,9 +54,17 @@ pub struct Frame {
     pub merge_vc: f32,
     /// The merge kernel's normalisation 1 / (π r² N) of the iteration.
     pub merge_normalization: f32,
-    /// The first image row the pass sums buffer holds (path tracing's film bands; 0 for the
-    /// other methods, whose sums hold the whole image).
+    /// The film band: the first image row the pass sums (and for the methods that splat, the
+    /// splat tallies and camera radiance) hold, and how many rows; the whole image unless it is
+    /// larger than one binding.
     pub film_row: u32,
+    pub film_rows: u32,
+    /// Pixels the band buffers hold (`film_rows` of the largest band times the width): the
+    /// offset of the tallies' words after the splat cells.
+    pub band_pixels: u32,
+    /// The first light subpath of the wave (the pool's path heads are the wave's).
+    pub wave_origin: u32,
+    pub pad: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -202,12 +211,11 @@ fn largest_binding(limits: &wgpu::Limits) -> u64 {
         .min(limits.max_buffer_size)
 }
 
-/// Whether the per-pixel buffers of a `width` x `height` render with `method` fit this device's
-/// largest storage binding; if not, a sentence for the user with the largest size that does.
-/// Path tracing's pass sums are cut into bands of rows (`GpuRenderer::film_rows`), so any
-/// image whose single row fits renders. The methods that splat (light, bdpt, sppm, vcm) write
-/// to any pixel from any light subpath, so their tallies and sums hold the whole image in one
-/// binding each: above lavapipe's 128 MiB, about 1900 x 1900, they refuse and say what renders.
+/// Whether a `width` x `height` render with `method` fits this device's largest storage
+/// binding; if not, a sentence for the user. The per-pixel buffers are cut into film bands of
+/// whole rows (path tracing: `GpuRenderer::film_rows`; the methods that splat: the band of
+/// their tallies, `bidirectional::splat_band_rows`), so any image whose single row fits
+/// renders: on lavapipe's 128 MiB, rows of up to 3.7 million pixels.
 pub fn check_image_fits(
     limits: &wgpu::Limits,
     method: Method,
@@ -215,35 +223,17 @@ pub fn check_image_fits(
     height: u32,
 ) -> Result<(), String> {
     let limit = largest_binding(limits);
-    if !method.splats() {
-        let row = width as u64 * PIXEL_SUMS_BYTES;
-        if row <= limit {
-            return Ok(());
-        }
-        return Err(format!(
-            "a {width}-pixel-wide row needs {row} bytes of pass sums, more than this adapter \
-             binds ({limit} bytes); render it with --backend cpu, or narrower"
-        ));
-    }
-    let largest = |pixels: u64| {
-        (pixels * PIXEL_SUMS_BYTES).max(4 * super::bidirectional::tally_words(pixels))
+    let fits = if method.splats() {
+        super::bidirectional::splat_band_rows(limit, width, height).is_some()
+    } else {
+        width as u64 * PIXEL_SUMS_BYTES <= limit
     };
-    let pixels = width as u64 * height as u64;
-    if largest(pixels) <= limit {
+    if fits {
         return Ok(());
     }
-    // The largest square image that fits, for the message.
-    let mut side = 1u64;
-    while largest((side + 1) * (side + 1)) <= limit {
-        side += 1;
-    }
     Err(format!(
-        "a {width}x{height} render with --method {method} needs a {:.0} MiB splat buffer, more \
-         than this adapter binds ({:.0} MiB; at most about {side}x{side} pixels); on the GPU, \
-         --method path renders any size (its film is split into bands); or render it with \
-         --backend cpu, or at a smaller size",
-        largest(pixels) as f64 / (1u64 << 20) as f64,
-        limit as f64 / (1u64 << 20) as f64
+        "one {width}-pixel row of a render with --method {method} needs more than this adapter \
+         binds in one buffer ({limit} bytes); render it narrower, or with --backend cpu"
     ))
 }
 
@@ -460,6 +450,10 @@ impl GpuRenderer {
             merge_vc: 0.0,
             merge_normalization: 0.0,
             film_row: 0,
+            film_rows: height,
+            band_pixels: width * height,
+            wave_origin: 0,
+            pad: 0,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -468,8 +462,8 @@ impl GpuRenderer {
         });
         // Path tracing's film bands: as many rows as one binding holds (`check_image_fits` has
         // made sure a row fits, and for the other methods the whole image).
-        let film_rows = if method.splats() {
-            height
+        let film_rows = if let Some(b) = &bidirectional {
+            b.band_rows
         } else {
             (largest_binding(&device.limits()) / (width as u64 * PIXEL_SUMS_BYTES))
                 .clamp(1, height as u64) as u32
@@ -581,7 +575,7 @@ impl GpuRenderer {
             let mut encoder = self.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
             self.queue.submit([encoder.finish()]);
-            self.fold_sums(film, band_start)?;
+            self.fold_sums(film, band_start, band_end - band_start)?;
             band_start = band_end;
         }
 
@@ -640,21 +634,24 @@ impl GpuRenderer {
         }
     }
 
-    /// Path tracing's rows per film band (tests: a band of a few rows exercises the split on a
-    /// small image). At least one row.
+    /// Rows per film band (tests: a band of a few rows exercises the split on a small image),
+    /// at least one and at most the buffers hold.
     pub fn set_film_rows(&mut self, rows: u32) {
-        if !self.method.splats() {
-            self.film_rows = rows.clamp(1, self.frame.camera.height);
+        self.film_rows = rows.clamp(1, self.film_rows);
+        if let Some(b) = &mut self.bidirectional {
+            b.band_rows = self.film_rows;
+            b.band_pixels = self.film_rows as u64 * self.frame.camera.width as u64;
         }
     }
 
     /// Reads the pass's sums back (copied to `readback` by the queued work) and folds them into
-    /// the film in f64, from row `first_row` on.
-    pub(super) fn fold_sums(&self, film: &mut Film, first_row: u32) -> Result<()> {
+    /// the film in f64: rows `first_row..first_row + rows`.
+    pub(super) fn fold_sums(&self, film: &mut Film, first_row: u32, rows: u32) -> Result<()> {
         let bytes = self.read_buffer(&self.readback)?;
         let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
-        let offset = first_row as usize * film.width as usize;
-        for (p, s) in film.pixels[offset..].iter_mut().zip(&sums) {
+        let w = film.width as usize;
+        let band = &mut film.pixels[first_row as usize * w..(first_row + rows) as usize * w];
+        for (p, s) in band.iter_mut().zip(&sums) {
             for c in 0..3 {
                 p.sum[c] += s.sum[c] as f64;
                 p.sum_sq[c] += s.sum_sq[c] as f64;
