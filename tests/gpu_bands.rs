@@ -98,38 +98,53 @@ fn splatting_methods_in_film_bands_equal_one_band() {
     }
 }
 
+/// `hexray render` of cornell_box on the GPU at one sample per pixel, from the command line;
+/// the image read back, after checking its size and sample count.
+fn render_one_spp(method: &str, width: usize, height: usize) -> hexray::output::RgbImage {
+    let dir = empty_temp_dir(&format!("gpu-bands-{method}"));
+    let exr = dir.join("big.exr");
+    let o = hexray_command()
+        .args([
+            "render",
+            "scenes/cornell_box.json",
+            "--backend",
+            "gpu",
+            "--method",
+            method,
+        ])
+        .args([
+            "--width",
+            &width.to_string(),
+            "--height",
+            &height.to_string(),
+        ])
+        .args(["--spp", "1", "-q", "--out"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (image, meta) = read_exr(&exr).unwrap();
+    assert_eq!((image.width, image.height), (width, height));
+    assert_eq!(meta.get("spp"), Some("1"));
+    image
+}
+
+/// The mean of rows `y0..y1` of an image (the sum of its channels).
+fn rows_mean(image: &hexray::output::RgbImage, y0: usize, y1: usize) -> f32 {
+    let rows = &image.pixels[y0 * image.width..y1 * image.width];
+    rows.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / rows.len() as f32
+}
+
 /// 3840 x 2160 (UHD) on lavapipe: path tracing's pass sums are 253 MiB, two bands of the
-/// 128 MiB binding. The render succeeds from the command line, and every pixel has its one sample.
+/// 128 MiB binding. The render succeeds from the command line, every pixel has its one sample,
+/// and both bands were traced (the bottom band's floor is lit as the top band's ceiling is).
 #[test]
 fn a_uhd_path_traced_image_renders_on_the_gpu() {
     if gpu().is_none() {
         return;
     }
-    let dir = empty_temp_dir("gpu-uhd");
-    let exr = dir.join("uhd.exr");
-    let o = hexray_command()
-        .args(["render", "scenes/cornell_box.json", "--backend", "gpu"])
-        .args(["--method", "path", "--width", "3840", "--height", "2160"])
-        .args(["--spp", "1", "-q", "--out"])
-        .arg(&exr)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    let (image, meta) = read_exr(&exr).unwrap();
-    assert_eq!((image.width, image.height), (3840, 2160));
-    assert_eq!(meta.get("spp"), Some("1"));
-    // Both bands were traced: the bottom band's floor is lit as the top band's ceiling light is.
-    let row_mean = |y: usize| {
-        let row = &image.pixels[y * 3840..(y + 1) * 3840];
-        row.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / 3840.0
-    };
-    assert!(
-        row_mean(100) > 0.0 && row_mean(2100) > 0.0,
-        "{} {}",
-        row_mean(100),
-        row_mean(2100)
-    );
+    let image = render_one_spp("path", 3840, 2160);
+    assert!(rows_mean(&image, 100, 101) > 0.0 && rows_mean(&image, 2100, 2101) > 0.0);
 }
 
 /// Light tracing at 2048 x 2048 on lavapipe: its splat tallies (36 bytes a pixel) are 144 MiB,
@@ -142,23 +157,6 @@ fn a_splatted_image_beyond_one_binding_renders_on_the_gpu() {
     if gpu().is_none() {
         return;
     }
-    let dir = empty_temp_dir("gpu-splat-bands");
-    let exr = dir.join("big.exr");
-    let o = hexray_command()
-        .args(["render", "scenes/cornell_box.json", "--backend", "gpu"])
-        .args(["--method", "light", "--width", "2048", "--height", "2048"])
-        .args(["--spp", "1", "-q", "--out"])
-        .arg(&exr)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    let (image, meta) = read_exr(&exr).unwrap();
-    assert_eq!((image.width, image.height), (2048, 2048));
-    assert_eq!(meta.get("spp"), Some("1"));
-    let band_mean = |y0: usize, y1: usize| {
-        let rows = &image.pixels[y0 * 2048..y1 * 2048];
-        rows.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / rows.len() as f32
-    };
-    assert!(band_mean(0, 1024) > 0.0 && band_mean(1900, 2048) > 0.0);
+    let image = render_one_spp("light", 2048, 2048);
+    assert!(rows_mean(&image, 0, 1024) > 0.0 && rows_mean(&image, 1900, 2048) > 0.0);
 }

@@ -20,8 +20,8 @@ use std::process::ExitCode;
 
 #[derive(Args, Debug, Clone)]
 pub(crate) struct RenderArgs {
-    /// Scene file (JSON) [default: scenes/tncg15_room.json; with --resume, the resumed
-    /// render's scene].
+    /// Scene file (JSON) [default: scenes/tncg15_room.json, or its copy built into hexray
+    /// where that file is absent; with --resume, the resumed render's scene].
     pub(crate) scene: Option<PathBuf>,
     /// Which renderer to use.
     #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]

@@ -305,6 +305,21 @@ impl Bidirectional {
     }
 }
 
+impl Bidirectional {
+    /// A new pool (and grid) for `capacity` light vertices, bound to the same tallies and
+    /// camera radiance.
+    fn resize_pool(&mut self, device: &wgpu::Device, capacity: u32) {
+        self.capacity = capacity;
+        self.pool = Pool::new(
+            device,
+            &self.layout,
+            capacity,
+            &self.tallies,
+            &self.camera_radiance,
+        );
+    }
+}
+
 impl GpuRenderer {
     /// Tests: at most `vertices` light vertices in the pool (as if the device bound no more),
     /// so that a small image needs several waves.
@@ -315,14 +330,7 @@ impl GpuRenderer {
             .expect("a method with light subpaths");
         b.max_capacity = vertices.max(1);
         if b.capacity > b.max_capacity {
-            b.capacity = b.max_capacity;
-            b.pool = Pool::new(
-                &self.device,
-                &b.layout,
-                b.capacity,
-                &b.tallies,
-                &b.camera_radiance,
-            );
+            b.resize_pool(&self.device, b.max_capacity);
         }
         self.frame.vertex_capacity = b.capacity;
     }
@@ -713,15 +721,9 @@ impl GpuRenderer {
         if merging && !overflowed.is_empty() && b.capacity < b.max_capacity {
             // One wave is cheapest (every further wave is a camera pass over the whole image):
             // grow the pool and its grid first, up to what the device binds.
-            b.capacity = ((most_asked as u64 * 5 / 4).max(2 * b.capacity as u64))
+            let capacity = ((most_asked as u64 * 5 / 4).max(2 * b.capacity as u64))
                 .min(b.max_capacity as u64) as u32;
-            b.pool = Pool::new(
-                &self.device,
-                &b.layout,
-                b.capacity,
-                &b.tallies,
-                &b.camera_radiance,
-            );
+            b.resize_pool(&self.device, capacity);
         } else if !overflowed.is_empty() && wave_rows == 1 {
             bail!(
                 "{}: one row of {w} light subpaths stored {most_asked} vertices, more than the \
