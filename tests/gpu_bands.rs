@@ -8,6 +8,25 @@ use hexray::film::Film;
 use hexray::method::Method;
 use hexray::output::read_exr;
 
+/// The band tests' image: 24x19 (the height a multiple neither of 5 nor of the 8-row
+/// workgroup), 3 samples, tncg15_room, seed 7.
+const W: u32 = 24;
+const H: u32 = 19;
+const SPP: u32 = 3;
+
+/// A GPU render of the band tests' image with `method`, in film bands of `rows` rows (None: as
+/// many as the buffers hold, here the whole image).
+fn render_in_bands(gpu: &hexray::gpu::Gpu, method: Method, rows: Option<u32>) -> Film {
+    let (scene, flat) = load("scenes/tncg15_room.json");
+    let mut r = gpu_renderer(gpu, &scene, &flat, W, H, 7, method, Faults::default());
+    if let Some(rows) = rows {
+        r.set_film_rows(rows);
+    }
+    let mut film = Film::new(W, H);
+    r.render(0, SPP, &mut film).unwrap();
+    film
+}
+
 /// The random streams are indexed by pixel and sample, not by band, so a film made of bands of
 /// five rows (each traced, read back and folded in turn) is the unbanded film bit for bit. The
 /// image's height is not a multiple of the band or of the 8-row workgroup, so the last band is
@@ -16,19 +35,9 @@ use hexray::output::read_exr;
 #[test]
 fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
     let Some(gpu) = gpu() else { return };
-    let (scene, flat) = load("scenes/tncg15_room.json");
-    let (w, h, spp) = (24, 19, 3);
-    let render = |rows: Option<u32>| {
-        let mut r = gpu_renderer(gpu, &scene, &flat, w, h, 7, Method::Path, Faults::default());
-        if let Some(rows) = rows {
-            r.set_film_rows(rows);
-        }
-        let mut film = Film::new(w, h);
-        r.render(0, spp, &mut film).unwrap();
-        film
-    };
-    let whole = render(None);
-    let banded = render(Some(5));
+    let (w, spp) = (W, SPP);
+    let whole = render_in_bands(gpu, Method::Path, None);
+    let banded = render_in_bands(gpu, Method::Path, Some(5));
     for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
         assert_eq!(a.n, spp as u64, "pixel {i}");
         assert_eq!(
@@ -52,21 +61,11 @@ fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
 #[test]
 fn splatting_methods_in_film_bands_equal_one_band() {
     let Some(gpu) = gpu() else { return };
-    let (scene, flat) = load("scenes/tncg15_room.json");
-    let (w, h, spp) = (24, 19, 3);
+    let (w, spp) = (W, SPP);
     let rel = |x: f64, y: f64| (x - y).abs() / x.abs().max(1e-30);
     for method in [Method::Light, Method::Bdpt, Method::Sppm, Method::Vcm] {
-        let render = |rows: Option<u32>| {
-            let mut r = gpu_renderer(gpu, &scene, &flat, w, h, 7, method, Faults::default());
-            if let Some(rows) = rows {
-                r.set_film_rows(rows);
-            }
-            let mut film = Film::new(w, h);
-            r.render(0, spp, &mut film).unwrap();
-            film
-        };
-        let whole = render(None);
-        let banded = render(Some(5));
+        let whole = render_in_bands(gpu, method, None);
+        let banded = render_in_bands(gpu, method, Some(5));
         for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
             let at = format!("{method}: pixel {i} (row {}): {a:?} {b:?}", i as u32 / w);
             assert_eq!((a.n, b.n), (spp as u64, spp as u64), "{at}");

@@ -203,9 +203,7 @@ impl Bidirectional {
         let (width, height) = (camera.width, camera.height);
         let pixels = width as u64 * height as u64;
         let limits = device.limits();
-        let max_binding = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
+        let max_binding = super::render::largest_binding(&limits);
         let vertex_size = std::mem::size_of::<LightVertex>() as u64;
         // The splat tallies and per-pixel buffers in one binding each (the check `render` makes
         // before any work, so a direct caller gets the same sentence).
@@ -605,12 +603,7 @@ impl GpuRenderer {
         // Film bands: the image, unless its tallies are larger than one binding. Every band
         // traces every light subpath of the iteration (splatting only into the band), so each
         // band's pixels get the whole estimate, and the iteration's image sum gathers all bands.
-        let mut band_start = 0;
-        while band_start < h {
-            let band_end = (band_start + b.band_rows).min(h);
-            let mut encoder = self.device.create_command_encoder(&Default::default());
-            encoder.clear_buffer(&self.sums, 0, None);
-            self.queue.submit([encoder.finish()]);
+        self.for_each_film_band(film, b.band_rows, |band_start, band_end| {
             if b.band_rows < h {
                 let a = (band_start * w) as usize;
                 let z = (band_end * w) as usize;
@@ -665,13 +658,7 @@ impl GpuRenderer {
                 }
                 self.row_dispatches(&b.resolve_pipeline, &frame, band_start, band_end);
             }
-            // Read back the band's pixel sums and fold them into the film.
-            let mut encoder = self.device.create_command_encoder(&Default::default());
-            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
-            self.queue.submit([encoder.finish()]);
-            self.fold_sums(film, band_start, band_end - band_start)?;
-            band_start = band_end;
-        }
+        })?;
 
         // Read back the iterations' image cells.
         let mut encoder = self.device.create_command_encoder(&Default::default());

@@ -205,7 +205,7 @@ pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
 const PIXEL_SUMS_BYTES: u64 = std::mem::size_of::<PixelSums>() as u64;
 
 /// The largest buffer the device binds as storage.
-fn largest_binding(limits: &wgpu::Limits) -> u64 {
+pub(super) fn largest_binding(limits: &wgpu::Limits) -> u64 {
     limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size)
@@ -562,28 +562,41 @@ impl GpuRenderer {
         self.check_device()?;
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let start = Instant::now();
-        // Film bands: the pass sums hold `film_rows` rows (the whole image unless it is larger
-        // than one binding); each band's samples are traced, read back and folded in turn.
-        let mut band_start = 0;
-        while band_start < h {
-            let band_end = (band_start + self.film_rows).min(h);
-            let mut encoder = self.device.create_command_encoder(&Default::default());
-            encoder.clear_buffer(&self.sums, 0, None);
-            self.queue.submit([encoder.finish()]);
-            self.dispatch_band(first, count, band_start, band_end);
-            // Read the band's sums back and fold them into the film in f64.
-            let mut encoder = self.device.create_command_encoder(&Default::default());
-            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
-            self.queue.submit([encoder.finish()]);
-            self.fold_sums(film, band_start, band_end - band_start)?;
-            band_start = band_end;
-        }
+        self.for_each_film_band(film, self.film_rows, |a, z| {
+            self.dispatch_band(first, count, a, z)
+        })?;
 
         // Size the next dispatches from this pass's throughput.
         let image = (w as u64) * (h as u64);
         let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
         self.paths_per_dispatch =
             ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
+        Ok(())
+    }
+
+    /// Film bands of `rows` rows (the whole image unless its per-pixel buffers are larger than
+    /// one binding), in turn: clears the pass sums, queues `work(band_start, band_end)`, reads
+    /// the band's sums back and folds them into the film in f64.
+    pub(super) fn for_each_film_band(
+        &self,
+        film: &mut Film,
+        rows: u32,
+        mut work: impl FnMut(u32, u32),
+    ) -> Result<()> {
+        let h = self.frame.camera.height;
+        let mut band_start = 0;
+        while band_start < h {
+            let band_end = (band_start + rows).min(h);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&self.sums, 0, None);
+            self.queue.submit([encoder.finish()]);
+            work(band_start, band_end);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+            self.queue.submit([encoder.finish()]);
+            self.fold_sums(film, band_start, band_end - band_start)?;
+            band_start = band_end;
+        }
         Ok(())
     }
 
@@ -614,6 +627,7 @@ impl GpuRenderer {
                     tile_origin: [0, y],
                     tile_size: [w, rows],
                     film_row: band_start,
+                    film_rows: band_end - band_start,
                     ..self.frame
                 };
                 // One submission per dispatch: the uniform write lands before this dispatch and
