@@ -394,6 +394,8 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
         }
         hit
     });
+    #[cfg(feature = "counters")]
+    counters::last_was_shadow();
     hit
 }
 
@@ -418,11 +420,15 @@ fn traverse(
     let inv_d = safe_inverse(ray.d);
     let ray4 = Ray4::new(ray);
     let mut t_limit = t_max;
+    #[cfg(feature = "counters")]
+    let _work = counters::Ray::start();
     // Interior children still to visit, with the distance at which the ray enters them.
     let mut stack = ArrayVec::<(u32, f32), STACK_SIZE>::new();
     let mut current = 0u32;
     loop {
         let node = &scene.nodes[current as usize];
+        #[cfg(feature = "counters")]
+        counters::node();
         let (t_enter, entered) = intersect_aabb4(node, ray.o, inv_d, t_limit);
         // Bit c set: the ray enters child c's box (a leaf's in `leaves`, a node's in `inner`).
         let mut interior = 0u32;
@@ -445,6 +451,8 @@ fn traverse(
                 (node.child[c] + node.count[c]) as usize,
             );
             debug_assert!(first % 4 == 0, "a leaf starts at a multiple of four");
+            #[cfg(feature = "counters")]
+            counters::primitives(node.count[c]);
             for k in (first..end).step_by(4) {
                 let pack = &scene.packs[k / 4];
                 let hits = if pack.triangles != 0 {
@@ -509,6 +517,76 @@ fn traverse(
             }
         }
         current = next.map_or(0, |(n, _)| n);
+    }
+}
+
+/// Work counters of the traversal (feature `counters`, for `examples/lane_occupancy.rs`): per
+/// ray traced on this thread, the nodes visited and the primitives tested, the units of work
+/// that `shaders/bvh.wgsl`'s loops take one at a time (the CPU tests a leaf's triangles four at
+/// a time, but counts them one by one here, as the shader takes them).
+#[cfg(feature = "counters")]
+pub mod counters {
+    use std::cell::{Cell, RefCell};
+
+    /// One ray's work.
+    #[derive(Clone, Copy, Debug, Default)]
+    pub struct Work {
+        pub nodes: u32,
+        pub primitives: u32,
+        /// An any-hit (shadow) ray rather than a closest-hit one.
+        pub shadow: bool,
+    }
+
+    thread_local! {
+        static CURRENT: Cell<Work> = const { Cell::new(Work {
+            nodes: 0,
+            primitives: 0,
+            shadow: false,
+        }) };
+        static LOG: RefCell<Vec<Work>> = const { RefCell::new(Vec::new()) };
+    }
+
+    /// Counts one ray from its creation to its drop, when its work goes to the log.
+    pub(super) struct Ray;
+    impl Ray {
+        pub(super) fn start() -> Ray {
+            CURRENT.with(|c| c.set(Work::default()));
+            Ray
+        }
+    }
+    impl Drop for Ray {
+        fn drop(&mut self) {
+            let w = CURRENT.with(|c| c.get());
+            LOG.with(|l| l.borrow_mut().push(w));
+        }
+    }
+    pub(super) fn node() {
+        CURRENT.with(|c| {
+            c.set(Work {
+                nodes: c.get().nodes + 1,
+                ..c.get()
+            })
+        });
+    }
+    pub(super) fn primitives(n: u32) {
+        CURRENT.with(|c| {
+            let w = c.get();
+            c.set(Work {
+                primitives: w.primitives + n,
+                ..w
+            })
+        });
+    }
+    pub(super) fn last_was_shadow() {
+        LOG.with(|l| {
+            if let Some(w) = l.borrow_mut().last_mut() {
+                w.shadow = true;
+            }
+        });
+    }
+    /// The work of the rays traced on this thread since the last call, in the order traced.
+    pub fn take() -> Vec<Work> {
+        LOG.with(|l| std::mem::take(&mut *l.borrow_mut()))
     }
 }
 
