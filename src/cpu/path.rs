@@ -68,6 +68,11 @@ impl Default for Faults {
 /// The radiance arriving at pixel (x, y) along one camera sample's path, with `light_samples`
 /// shadow rays at every diffuse vertex (1 is the default; see step 4). `rays` counts the rays
 /// traced (closest-hit and shadow), for the benchmark's rays/s.
+///
+/// The path is started ([`start_path`]), advanced one bounce at a time ([`path_bounce`]) until
+/// it ends, and finished ([`finish_path`]). The shader runs the same three functions, but its
+/// `render` hands a lane whose path ended to the pixel's next sample at once (path
+/// regeneration), so that lanes running in lockstep do not wait for their group's longest path.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_path(
     scene: &FlatScene,
@@ -79,135 +84,175 @@ pub fn trace_path(
     faults: Faults,
     rays: &mut u64,
 ) -> Vec3 {
+    let mut path = start_path(camera, x, y, sampler);
+    while path_bounce(scene, &mut path, sampler, light_samples, faults, rays) {}
+    finish_path(&path)
+}
+
+/// One camera sample's path between two bounces: the ray to trace next and what the path has
+/// gathered and carries so far.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub ray: Ray,
+    pub radiance: Vec3,
+    pub throughput: Vec3,
+    /// Product of etap² over refractions; throughput x eta_scale is what roulette looks at, so
+    /// that radiance scaling at glass boundaries does not end paths inside glass.
+    pub eta_scale: f32,
+    /// Solid-angle pdf of the BSDF sample that produced `ray`; 0 for the camera ray and after a
+    /// specular bounce (no light-sampling strategy competes there).
+    pub bsdf_pdf: f32,
+    pub bounce: u32,
+    /// `Faults::grey_indirect` only: the radiance gathered before the first diffuse bounce, or
+    /// None until that bounce.
+    pub before_indirect: Option<Vec3>,
+}
+
+/// Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
+#[inline]
+pub fn start_path(camera: &Camera, x: u32, y: u32, sampler: &Sampler) -> PathState {
+    let u_camera = sampler.draw4(DIM_CAMERA);
+    PathState {
+        ray: camera.ray(x, y, u_camera[0], u_camera[1]),
+        radiance: Vec3::ZERO,
+        throughput: Vec3::ONE,
+        eta_scale: 1.0,
+        bsdf_pdf: 0.0,
+        bounce: 0,
+        before_indirect: None,
+    }
+}
+
+/// Steps 2 to 6 of one bounce: traces `path.ray`, adds what it finds to `path.radiance` and
+/// prepares the next ray; false when the path has ended.
+#[inline]
+pub fn path_bounce(
+    scene: &FlatScene,
+    path: &mut PathState,
+    sampler: &Sampler,
+    light_samples: u32,
+    faults: Faults,
+    rays: &mut u64,
+) -> bool {
     // N light samples and one BSDF sample per vertex: Veach's multi-sample MIS weighs each
     // strategy by n_i · p_i (eq. 9.13), so N enters both weights and divides the NEE sum.
     let n_light = light_samples.max(1) as f32;
-    // Step 1 - camera ray: a uniform point in the pixel (box filter) through the pinhole.
-    let u_camera = sampler.draw4(DIM_CAMERA);
-    let mut ray = camera.ray(x, y, u_camera[0], u_camera[1]);
+    let bounce = path.bounce;
 
-    let mut radiance = Vec3::ZERO;
-    let mut throughput = Vec3::ONE;
-    // Product of etap² over refractions; throughput x eta_scale is what roulette looks at, so
-    // that radiance scaling at glass boundaries does not end paths inside glass.
-    let mut eta_scale = 1.0f32;
-    // Solid-angle pdf of the BSDF sample that produced `ray`; 0 for the camera ray and after a
-    // specular bounce (no light-sampling strategy competes there).
-    let mut bsdf_pdf = 0.0f32;
-    let mut bounce = 0u32;
-    // `Faults::grey_indirect` only: the radiance gathered before the first diffuse bounce, or
-    // None until that bounce.
-    let mut before_indirect: Option<Vec3> = None;
+    // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
+    // outside the scene, so a miss ends the path.
+    *rays += 1;
+    let Some(hit) = intersect_closest(scene, &path.ray, f32::MAX) else {
+        return false;
+    };
+    let material = scene.materials[hit.material as usize];
+    let wo = -path.ray.d;
+    let cos_o = hit.n.dot(wo);
 
-    loop {
-        // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
-        // outside the scene, so a miss ends the path.
-        *rays += 1;
-        let Some(hit) = intersect_closest(scene, &ray, f32::MAX) else {
-            break;
-        };
-        let material = scene.materials[hit.material as usize];
-        let wo = -ray.d;
-        let cos_o = hit.n.dot(wo);
+    // Step 3 - emission: an emitter seen from its front. After the camera or a specular
+    // bounce it is counted in full; after a diffuse bounce it is weighted by the power
+    // heuristic against light sampling, whose pdf for this point is converted to solid
+    // angle at the previous vertex (the ray's direction is unit, so hit.t is the distance).
+    if material.kind == KIND_EMITTER && cos_o > 0.0 {
+        let le = Vec3::from(material.emission);
+        if path.bsdf_pdf == 0.0 {
+            path.radiance += path.throughput * le;
+        } else {
+            let light_pdf =
+                area_to_solid_angle(emitter_pdf_area(scene, hit.prim), hit.t * hit.t, cos_o);
+            path.radiance +=
+                path.throughput * le * power_heuristic(path.bsdf_pdf, n_light * light_pdf);
+        }
+    }
 
-        // Step 3 - emission: an emitter seen from its front. After the camera or a specular
-        // bounce it is counted in full; after a diffuse bounce it is weighted by the power
-        // heuristic against light sampling, whose pdf for this point is converted to solid
-        // angle at the previous vertex (the ray's direction is unit, so hit.t is the distance).
-        if material.kind == KIND_EMITTER && cos_o > 0.0 {
-            let le = Vec3::from(material.emission);
-            if bsdf_pdf == 0.0 {
-                radiance += throughput * le;
+    // Step 4 - next-event estimation at diffuse surfaces: N times, choose an emitter
+    // triangle by power and a uniform point on it, trace one shadow ray, and add
+    // f · Le · cos θs / (N · p_ω(light)), with p_ω the area pdf converted to solid angle,
+    // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
+    let u_light = sampler.draw4(dim_light(bounce));
+    let albedo = Vec3::from(material.color);
+    let diffuse = material.kind == KIND_DIFFUSE
+        || (material.kind == KIND_EMITTER && albedo.max_element() > 0.0);
+    if material.kind == KIND_EMITTER && !diffuse {
+        // A black emitter reflects nothing: the path ends here.
+        return false;
+    }
+    if diffuse {
+        let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
+        for j in 0..light_samples.max(1) {
+            let u = if j == 0 {
+                u_light
             } else {
-                let light_pdf =
-                    area_to_solid_angle(emitter_pdf_area(scene, hit.prim), hit.t * hit.t, cos_o);
-                radiance += throughput * le * power_heuristic(bsdf_pdf, n_light * light_pdf);
-            }
-        }
-
-        // Step 4 - next-event estimation at diffuse surfaces: N times, choose an emitter
-        // triangle by power and a uniform point on it, trace one shadow ray, and add
-        // f · Le · cos θs / (N · p_ω(light)), with p_ω the area pdf converted to solid angle,
-        // weighted by the power heuristic against BSDF sampling (p_ω(bsdf) = cos θs / pi).
-        let u_light = sampler.draw4(dim_light(bounce));
-        let albedo = Vec3::from(material.color);
-        let diffuse = material.kind == KIND_DIFFUSE
-            || (material.kind == KIND_EMITTER && albedo.max_element() > 0.0);
-        if material.kind == KIND_EMITTER && !diffuse {
-            // A black emitter reflects nothing: the path ends here.
-            break;
-        }
-        if diffuse {
-            let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
-            for j in 0..light_samples.max(1) {
-                let u = if j == 0 {
-                    u_light
-                } else {
-                    sampler.draw4(dim_light_extra(bounce, j))
+                sampler.draw4(dim_light_extra(bounce, j))
+            };
+            let ls = sample_emitter(scene, u[0], u[1], u[2]);
+            let to_light = ls.p - hit.p;
+            let dist2 = to_light.length_squared();
+            let wi = to_light / dist2.sqrt();
+            let cos_s = n_facing.dot(wi);
+            let cos_l = -ls.n.dot(wi);
+            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
+                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
+                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+                let shadow = Ray {
+                    o: origin,
+                    d: light_point - origin,
                 };
-                let ls = sample_emitter(scene, u[0], u[1], u[2]);
-                let to_light = ls.p - hit.p;
-                let dist2 = to_light.length_squared();
-                let wi = to_light / dist2.sqrt();
-                let cos_s = n_facing.dot(wi);
-                let cos_l = -ls.n.dot(wi);
-                if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                    let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                    let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                    let shadow = Ray {
-                        o: origin,
-                        d: light_point - origin,
-                    };
-                    *rays += 1;
-                    if !occluded(scene, &shadow, 1.0) {
-                        let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                        let f = albedo * FRAC_1_PI;
-                        let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
-                        radiance += throughput * f * ls.le * (cos_s * w / (n_light * light_pdf));
-                    }
+                *rays += 1;
+                if !occluded(scene, &shadow, 1.0) {
+                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                    let f = albedo * FRAC_1_PI;
+                    let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
+                    path.radiance +=
+                        path.throughput * f * ls.le * (cos_s * w / (n_light * light_pdf));
                 }
             }
         }
-
-        // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
-        // the sample's weight f · |cos θi| / pdf.
-        let u_bsdf = sampler.draw4(dim_bsdf(bounce));
-        let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
-        throughput *= bs.weight;
-        if bs.pdf == 0.0 {
-            throughput *= faults.specular_scale;
-        }
-        eta_scale *= bs.eta2;
-        bsdf_pdf = bs.pdf;
-        if faults.grey_indirect && bs.pdf > 0.0 && before_indirect.is_none() {
-            before_indirect = Some(radiance);
-        }
-        if throughput.max_element() <= 0.0 {
-            break;
-        }
-        ray = Ray {
-            o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
-            d: bs.wi,
-        };
-
-        // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
-        // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
-        // unbiased (E[X / q · 1{u < q}] = E[X]) while ending low-throughput paths.
-        if bounce >= RR_START_BOUNCE {
-            let q = (throughput.max_element() * eta_scale).min(RR_MAX_SURVIVAL);
-            if u_light[3] >= q {
-                break;
-            }
-            throughput /= q;
-        }
-        bounce += 1;
-        if bounce >= faults.max_bounces {
-            break;
-        }
     }
-    if let Some(before) = before_indirect {
-        let indirect = radiance - before;
-        radiance = before + Vec3::splat((indirect.x + indirect.y + indirect.z) / 3.0);
+
+    // Step 5 - scattering: sample the BSDF for the next direction; the throughput takes
+    // the sample's weight f · |cos θi| / pdf.
+    let u_bsdf = sampler.draw4(dim_bsdf(bounce));
+    let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
+    path.throughput *= bs.weight;
+    if bs.pdf == 0.0 {
+        path.throughput *= faults.specular_scale;
     }
-    radiance
+    path.eta_scale *= bs.eta2;
+    path.bsdf_pdf = bs.pdf;
+    if faults.grey_indirect && bs.pdf > 0.0 && path.before_indirect.is_none() {
+        path.before_indirect = Some(path.radiance);
+    }
+    if path.throughput.max_element() <= 0.0 {
+        return false;
+    }
+    path.ray = Ray {
+        o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+        d: bs.wi,
+    };
+
+    // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
+    // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
+    // unbiased (E[X / q · 1{u < q}] = E[X]) while ending low-throughput paths.
+    if bounce >= RR_START_BOUNCE {
+        let q = (path.throughput.max_element() * path.eta_scale).min(RR_MAX_SURVIVAL);
+        if u_light[3] >= q {
+            return false;
+        }
+        path.throughput /= q;
+    }
+    path.bounce += 1;
+    path.bounce < faults.max_bounces
+}
+
+/// The path's estimate; under `Faults::grey_indirect`, its indirect light replaced by its grey.
+#[inline]
+pub fn finish_path(path: &PathState) -> Vec3 {
+    match path.before_indirect {
+        Some(before) => {
+            let indirect = path.radiance - before;
+            before + Vec3::splat((indirect.x + indirect.y + indirect.z) / 3.0)
+        }
+        None => path.radiance,
+    }
 }
