@@ -8,8 +8,9 @@ variant column is the integrator). Each point is a fresh render with its own see
 the render call alone (after a warm-up render that compiles the kernels), with relMSE = mean
 (x - r)^2 / (r^2 + 0.01) over pixel-channels, as `hexray compare` computes it. Waves double the
 samples while the next one fits the budget; then one last wave is sized from the measured rate to
-end about 5 % past the budget, so that the curve passes the budget and its value there is
-interpolated between two measurements rather than read off a wave that ended at half of it.
+end about 15 % past the budget (the rate drifts by up to 10 % from wave to wave), so that the
+curve passes the budget and its value there is interpolated between two measurements rather than
+read off a wave that ended at half of it.
 With --spp N, one render of N samples instead of the curve (for alternating with hexray at
 equal time: benches/methods_vs_mitsuba.sh).
 
@@ -92,7 +93,7 @@ def main():
     while 2 * seconds <= a.seconds:
         spp *= 2
         seconds = point(spp)
-    last = int(spp * 1.05 * a.seconds / seconds)
+    last = int(spp * 1.15 * a.seconds / seconds)
     if last > spp:
         point(last)
 
