@@ -105,15 +105,9 @@ fn gpu_matches_cpu_on_cornell_box() {
 fn same_streams(rel: &str, gpu_faults: Faults) -> Option<f64> {
     const SAME_SPP: u32 = 64;
     let gpu = gpu()?;
-    let a = MeanImage::from_film(&render_cpu(rel, SIZE, SIZE, SAME_SPP, 5, Faults::NONE));
-    let b = MeanImage::from_film(&render_gpu(gpu, rel, SIZE, SIZE, SAME_SPP, 5, gpu_faults));
-    let mut sum = 0.0;
-    for (x, r) in b.mean.iter().zip(&a.mean) {
-        for c in 0..3 {
-            sum += (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01);
-        }
-    }
-    let e = sum / (3 * a.mean.len()) as f64;
+    let a = render_cpu(rel, SIZE, SIZE, SAME_SPP, 5, Faults::NONE);
+    let b = render_gpu(gpu, rel, SIZE, SIZE, SAME_SPP, 5, gpu_faults);
+    let e = relmse_between(&b, &a);
     eprintln!("path {rel}, same seed, GPU against CPU: relMSE {e:.3e}");
     Some(e)
 }

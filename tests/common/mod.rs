@@ -634,3 +634,16 @@ pub fn against_truth(
         dropped: film.dropped(),
     }
 }
+
+/// relMSE of one film against another of the same size (the second as the reference).
+pub fn relmse_between(a: &Film, b: &Film) -> f64 {
+    use hexray::stats::MeanImage;
+    let (a, b) = (MeanImage::from_film(a), MeanImage::from_film(b));
+    let mut sum = 0.0;
+    for (x, r) in a.mean.iter().zip(&b.mean) {
+        for c in 0..3 {
+            sum += (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01);
+        }
+    }
+    sum / (3 * a.mean.len()) as f64
+}
