@@ -55,25 +55,12 @@ for name in "${scenes[@]}"; do
         --overlay "$dir/mitsuba.csv" --out "$dir"
     echo "== $name: Mitsuba path, $seconds s (after)" >&2
     mitsuba_curve "$scene" "$ref" after | tail -n +2 >> "$dir/mitsuba.csv"
-    python3 - "$dir/curve.csv" "$dir/mitsuba.csv" "$seconds" "$name" > "$dir/table.md" <<'PY'
-import csv, math, sys
-hexray_csv, mitsuba_csv, budget, name = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
-series = {}
-for r in csv.DictReader(open(hexray_csv)):
-    series.setdefault(r["backend"], []).append((float(r["seconds"]), float(r["relmse"])))
-for r in csv.DictReader(open(mitsuba_csv)):
-    series.setdefault("mitsuba " + r["variant"], []).append((float(r["seconds"]), float(r["relmse"])))
-
-def at(points, t):
-    """relMSE at t, interpolated log-log between the two waves around it (None outside)."""
-    points.sort()
-    for (t0, e0), (t1, e1) in zip(points, points[1:]):
-        if t0 <= t <= t1:
-            f = (math.log(t) - math.log(t0)) / (math.log(t1) - math.log(t0))
-            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
-    return None
-
-values = {k: at(v, budget) for k, v in series.items()}
+    python3 - "$dir" "$seconds" "$name" > "$dir/table.md" <<'PY'
+import sys
+sys.path.insert(0, "benches")
+from curve_table import at, series
+folder, budget, name = sys.argv[1], float(sys.argv[2]), sys.argv[3]
+values = {k: at(v, budget) for k, v in series(folder).items()}
 mitsuba = [v for k, v in values.items() if k.startswith("mitsuba") and v]
 print(f"| {name}: series | relMSE at {budget:g} s | ratio to Mitsuba (before, after) |")
 print("| --- | --- | --- |")

@@ -132,26 +132,11 @@ import csv, json, math, os, sys
 out, budget = sys.argv[1], float(sys.argv[2])
 scenes = [l.split() for l in open(sys.argv[3]) if l.strip()]
 
-def series(name):
-    rows = []
-    path = f"{out}/{name}/curve.csv"
-    if os.path.exists(path):
-        rows += [(r["backend"], float(r["seconds"]), float(r["relmse"]), int(r["spp"])) for r in csv.DictReader(open(path))]
-    path = f"{out}/{name}/mitsuba.csv"
-    if os.path.exists(path):
-        rows += [("mitsuba " + r["variant"], float(r["seconds"]), float(r["relmse"]), int(r["spp"])) for r in csv.DictReader(open(path))]
-    by = {}
-    for b, s, e, n in rows:
-        by.setdefault(b, []).append((s, e, n))
-    return {b: sorted(v) for b, v in by.items()}
+sys.path.insert(0, "benches")
+from curve_table import at, series as series_in
 
-def at(points, t):
-    """relMSE at time t, log-log between the waves around it (None outside the curve)."""
-    for (s0, e0, _), (s1, e1, _) in zip(points, points[1:]):
-        if s0 <= t <= s1 and e0 > 0 and e1 > 0:
-            f = (math.log(t) - math.log(s0)) / (math.log(s1) - math.log(s0))
-            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
-    return None
+def series(name):
+    return series_in(f"{out}/{name}")
 
 def fmt(x):
     return "–" if x is None else f"{x:.2e}"
