@@ -1,6 +1,10 @@
 // The path integrator: `src/cpu/path.rs` again, with the same names, the same steps in the same
 // order and the same step comments. Unidirectional path tracing with next-event estimation and
 // multiple importance sampling (power heuristic); Russian roulette, no maximum depth.
+//
+// A path is `start_path`, then `path_bounce` until it returns false, then `finish_path`: the
+// CPU's `trace_path` for one sample. Here `render` runs that sequence for all of a pass's
+// samples of a pixel in one loop of bounces (path regeneration), in sample order.
 
 const RR_START_BOUNCE: u32 = 3u;
 const RR_MAX_SURVIVAL: f32 = 0.95;
