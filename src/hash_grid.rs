@@ -170,20 +170,79 @@ impl HashGrid {
     /// Calls `visit(i)` for every vertex i whose position lies within r of `p`
     /// (|x − p|² < r²), bucket by bucket in the order of [`GridParams::query_buckets`].
     #[inline]
-    pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        if self.params.count == 0 {
-            return;
-        }
-        let (buckets, n) = self.params.query_buckets(p);
+    pub fn query(&self, p: Vec3, visit: impl FnMut(u32)) {
+        self.finish_query(&self.begin_query(p), visit);
+    }
+
+    /// The first of a query's three steps ([`HashGrid::query`] runs them back to back): its
+    /// buckets, whose ranges in `starts` it asks the memory system for without waiting.
+    ///
+    /// A query is bound by memory latency, not arithmetic: its buckets' ranges and entries lie
+    /// at hashed places of arrays larger than the cache, and each step's addresses come from
+    /// the loads of the one before. The camera pass knows a merge's point when it finds the
+    /// hit, well before it merges, so it takes the steps apart with other work between them
+    /// (next-event estimation, connections), and each step finds its data in the cache. A
+    /// prefetch is a hint: what the query visits does not change.
+    #[inline]
+    pub fn begin_query(&self, p: Vec3) -> PendingQuery {
+        let (buckets, n) = if self.params.count == 0 {
+            ([0; 8], 0)
+        } else {
+            self.params.query_buckets(p)
+        };
         for &b in &buckets[..n] {
+            prefetch(&self.starts[b as usize]);
+        }
+        PendingQuery { p, buckets, n }
+    }
+
+    /// The second step: the buckets' ranges (from the cache, if the first step was early
+    /// enough), and a prefetch of their entries.
+    #[inline]
+    pub fn prefetch_entries(&self, query: &PendingQuery) {
+        for &b in &query.buckets[..query.n] {
+            let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
+            if start < end {
+                prefetch(&self.entries[start as usize]);
+                prefetch(&self.entries[end as usize - 1]);
+            }
+        }
+    }
+
+    /// The last step: `visit(i)` for every vertex within r, as [`HashGrid::query`] says.
+    #[inline]
+    pub fn finish_query(&self, query: &PendingQuery, mut visit: impl FnMut(u32)) {
+        for &b in &query.buckets[..query.n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
             for e in &self.entries[start as usize..end as usize] {
-                if (Vec3::new(e[0], e[1], e[2]) - p).length_squared() < self.params.radius2 {
+                if (Vec3::new(e[0], e[1], e[2]) - query.p).length_squared() < self.params.radius2 {
                     visit(entry_index(e));
                 }
             }
         }
     }
+}
+
+/// A query begun by [`HashGrid::begin_query`]: its point and buckets (the first `n`).
+#[derive(Clone, Copy, Debug)]
+pub struct PendingQuery {
+    p: Vec3,
+    buckets: [u32; 8],
+    n: usize,
+}
+
+/// Asks for the cache line holding `x`, without waiting for it.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing into the program and cannot fault, whatever the address
+    // (here that of a live reference); `_mm_prefetch` is SSE, which every x86-64 has.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
 
 #[cfg(test)]

@@ -177,6 +177,9 @@ impl CameraPass<'_> {
                 let albedo = Vec3::from(material.color);
                 let pdf_rev = cos_o.abs() * FRAC_1_PI;
                 let here = (hit.p, hit.p_err, hit.n);
+                // Merging's query (step 6) begins now, so that its memory reads overlap with
+                // steps 4 and 5 (`HashGrid::begin_query`).
+                let merge_query = self.photons.as_ref().map(|ph| ph.grid.begin_query(hit.p));
 
                 // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
                 // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
@@ -202,6 +205,10 @@ impl CameraPass<'_> {
                     let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                     let light = (ls.p, ls.p_err, ls.n);
                     radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
+                }
+
+                if let (Some(photons), Some(query)) = (&self.photons, &merge_query) {
+                    photons.grid.prefetch_entries(query);
                 }
 
                 // Step 5 - connections (s ≥ 2): to each vertex of this pixel's light subpath,
@@ -252,9 +259,9 @@ impl CameraPass<'_> {
                 // f α, weighted against every other strategy (SPPM: 1). The photon is taken
                 // as arrived here: Lambert's f = ρ/π, and the densities of its direction
                 // use its own normal's cosine, which stays positive across the disk.
-                if let Some(photons) = &self.photons {
+                if let (Some(photons), Some(query)) = (&self.photons, &merge_query) {
                     let mut gathered = Vec3::ZERO;
-                    photons.grid.query(hit.p, |i| {
+                    photons.grid.finish_query(query, |i| {
                         let v = &photons.vertices[i as usize];
                         let n_light = Vec3::from(v.n);
                         if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
