@@ -148,7 +148,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             // side of the surface, counted with the disk kernel 1 / (pi r^2 N) times f alpha,
             // weighted against every other strategy (SPPM: 1). The photon is taken as arrived
             // here: Lambert's f = rho / pi, and the densities of its direction use its own
-            // normal's cosine, which stays positive across the disk.
+            // normal's cosine, which stays positive across the disk. (The CPU begins this
+            // query at the hit and prefetches it during steps 4 and 5; here other invocations
+            // hide its memory latency, and the query is the same.)
             if merges() {
                 var gathered = vec3<f32>(0.0);
                 let q = query_buckets(hit.p);

@@ -177,9 +177,14 @@ impl CameraPass<'_> {
                 let albedo = Vec3::from(material.color);
                 let pdf_rev = cos_o.abs() * FRAC_1_PI;
                 let here = (hit.p, hit.p_err, hit.n);
-                // Merging's query (step 6) begins now, so that its memory reads overlap with
-                // steps 4 and 5 (`HashGrid::begin_query`).
-                let merge_query = self.photons.as_ref().map(|ph| ph.grid.begin_query(hit.p));
+                // Merging's query (step 6) begins now and its entries are prefetched after
+                // step 4, so that its memory reads overlap with steps 4 and 5
+                // (`HashGrid::begin_query`; the CPU alone: a GPU hides the latency with other
+                // invocations).
+                let merging = self
+                    .photons
+                    .as_ref()
+                    .map(|photons| (photons, photons.grid.begin_query(hit.p)));
 
                 // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
                 // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
@@ -207,7 +212,7 @@ impl CameraPass<'_> {
                     radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
                 }
 
-                if let (Some(photons), Some(query)) = (&self.photons, &merge_query) {
+                if let Some((photons, query)) = &merging {
                     photons.grid.prefetch_entries(query);
                 }
 
@@ -259,7 +264,7 @@ impl CameraPass<'_> {
                 // f α, weighted against every other strategy (SPPM: 1). The photon is taken
                 // as arrived here: Lambert's f = ρ/π, and the densities of its direction
                 // use its own normal's cosine, which stays positive across the disk.
-                if let (Some(photons), Some(query)) = (&self.photons, &merge_query) {
+                if let Some((photons, query)) = &merging {
                     let mut gathered = Vec3::ZERO;
                     photons.grid.finish_query(query, |i| {
                         let v = &photons.vertices[i as usize];
