@@ -63,6 +63,10 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
         let material = materials[hit.material];
         let wo = -ray.d;
         let cos_o = dot(hit.n, wo);
+        if density_vanishes(cos_o) && frame.continue_at_vanishing_density == 0u {
+            // A grazing hit that no f32 density can describe ends the subpath.
+            break;
+        }
         m = mis_at_hit(m, hit.t * hit.t, abs(cos_o));
         // Edges of the camera subpath up to this vertex.
         let depth = bounce + 1u;

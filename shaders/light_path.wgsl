@@ -117,6 +117,10 @@ fn trace_light_path(sampler: Sampler, path: u32) {
         let material = materials[hit.material];
         let wo = -ray.d;
         let cos_o = dot(hit.n, wo);
+        if density_vanishes(cos_o) && frame.continue_at_vanishing_density == 0u {
+            // A grazing hit that no f32 density can describe ends the subpath.
+            break;
+        }
         m = mis_at_hit(m, hit.t * hit.t, abs(cos_o));
         let length = bounce + 1u;
         if length >= max_path_edges() {

@@ -105,7 +105,8 @@ struct Frame {
     band_pixels: u32,
     // The first light subpath of the wave (the pool's path heads are the wave's).
     wave_origin: u32,
-    pad: u32,
+    // Test-only: a subpath goes on past a hit whose density vanishes (`Faults`), 0 or 1.
+    continue_at_vanishing_density: u32,
 }
 
 const METHOD_PATH: u32 = 0u;
@@ -130,6 +131,8 @@ const NOT_AN_EMITTER: u32 = 0xffffffffu;
 const PRIM_SPHERE_BIT: u32 = 0x80000000u;
 // The largest f32: "no limit" for ray parameters (WGSL has no infinity literal).
 const F32_MAX: f32 = 3.40282347e38;
+// The smallest normal f32 (Rust's f32::MIN_POSITIVE).
+const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 
 // The scene arrays (bindings 0 to 5) are declared in bindings_storage.wgsl or
 // bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/render.rs).

@@ -86,7 +86,15 @@ fn mis_light(pdf_area: f32, pdf_dir: f32, cos: f32, merge: MergeMis) -> SubpathM
     return SubpathMis(mis(pdf_area / emission_pdf), d_vc, d_vc * merge.vc);
 }
 
-// At a hit dist2 (squared) away, |cos| at the surface: solid angle becomes area.
+// Whether a hit's area density vanishes in f32 (mis(cos) below the smallest normal f32, |cos| <
+// 1.1e-19): the subpath ends there, since mis_at_hit would divide by it (subpath.rs explains why
+// that changes no estimate). Written so that a NaN cosine ends it too.
+fn density_vanishes(cos: f32) -> bool {
+    return !(mis(cos) >= F32_MIN_POSITIVE);
+}
+
+// At a hit dist2 (squared) away, |cos| at the surface: solid angle becomes area. The caller has
+// ended the subpath where that density vanishes.
 fn mis_at_hit(m: SubpathMis, dist2: f32, cos: f32) -> SubpathMis {
     var r = m;
     r.d_vcm *= mis(dist2);

@@ -143,6 +143,22 @@ pub fn mis(x: f32) -> f32 {
     x * x
 }
 
+/// Whether a hit's area density p_ω |cos θ| / dist² vanishes in f32, so that the subpath must
+/// end there: mis(cos) below the smallest normal f32, |cos θ| < 1.1e-19 (exactly 0 where a ray
+/// is tangent to a sphere). [`SubpathMis::at_hit`] divides by mis(cos): at a first hit that
+/// is 0 / 0, later inf, and the next specular bounce, whose outgoing cosine is as small,
+/// multiplies inf by 0, so every weight after it would be NaN. Such hits are met with
+/// probability of the order of 1e-19 by any sampled direction, and exactly never where the
+/// cosine is 0, so ending the subpath there changes no estimate that an f32 can resolve (the
+/// NaN samples were dropped, which biased the pixel the same way and lost the sample's other
+/// strategies). Written so that a NaN cosine ends the subpath too. `tests/stability_tangent.rs`
+/// renders a camera whose every ray is tangent to a mirror sphere.
+#[inline]
+pub fn density_vanishes(cos: f32) -> bool {
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    !(mis(cos) >= f32::MIN_POSITIVE)
+}
+
 /// A vertex of a light subpath, stored for the camera subpaths to connect to (BDPT): only
 /// vertices on non-specular surfaces, which are the only ones a connection can use. Five vec4s,
 /// the same layout in `shaders/subpath.wgsl` (`LightVertex`).
@@ -252,7 +268,8 @@ impl SubpathMis {
 
     /// At a hit `dist2` (squared) from the previous vertex, with |cos θ| between the surface's
     /// normal and the arriving ray: the solid-angle density of the sampled direction becomes an
-    /// area density, p_A = p_ω |cos θ| / dist².
+    /// area density, p_A = p_ω |cos θ| / dist². The caller has ended the subpath where that
+    /// density vanishes ([`density_vanishes`]).
     #[inline]
     pub fn at_hit(&mut self, dist2: f32, cos: f32) {
         self.d_vcm *= mis(dist2);

@@ -116,7 +116,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             film_rows,
             band_pixels,
             wave_origin,
-            pad
+            continue_at_vanishing_density
         }),
         rust_layout!(GridParams {
             min,

@@ -42,6 +42,7 @@ mod stability_grazing;
 mod stability_mirror;
 mod stability_mirror_corridor;
 mod stability_shadow_colour;
+mod stability_tangent;
 mod stability_thin;
 mod stability_tiny_light;
 mod standard_error;

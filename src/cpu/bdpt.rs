@@ -37,8 +37,8 @@ use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::sampling::{dim_bsdf, dim_connection, dim_light, Sampler, DIM_CAMERA};
 use crate::subpath::{
-    shadow_survival, weight_connection, weight_emission, weight_merge, weight_next_event,
-    LightVertex, MergeMis, SubpathMis,
+    density_vanishes, shadow_survival, weight_connection, weight_emission, weight_merge,
+    weight_next_event, LightVertex, MergeMis, SubpathMis,
 };
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -148,6 +148,10 @@ impl CameraPass<'_> {
             let material = scene.materials[hit.material as usize];
             let wo = -ray.d;
             let cos_o = hit.n.dot(wo);
+            if density_vanishes(cos_o) && !faults.continue_at_vanishing_density {
+                // A grazing hit that no f32 density can describe ends the subpath.
+                break;
+            }
             mis.at_hit(hit.t * hit.t, cos_o.abs());
             // Edges of the camera subpath up to this vertex.
             let depth = bounce + 1;

@@ -30,8 +30,8 @@ use crate::light::sample_emission;
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
-    shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex, MergeMis,
-    SubpathMis, NO_VERTEX,
+    density_vanishes, shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex,
+    MergeMis, SubpathMis, NO_VERTEX,
 };
 use glam::Vec3;
 
@@ -195,6 +195,10 @@ impl LightPass<'_> {
             let material = scene.materials[hit.material as usize];
             let wo = -ray.d;
             let cos_o = hit.n.dot(wo);
+            if density_vanishes(cos_o) && !self.faults.continue_at_vanishing_density {
+                // A grazing hit that no f32 density can describe ends the subpath.
+                break;
+            }
             mis.at_hit(hit.t * hit.t, cos_o.abs());
             let length = bounce + 1;
             if length >= max_path_edges(&self.faults) {

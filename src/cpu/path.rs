@@ -47,6 +47,10 @@ pub struct Faults {
     /// SPPM and VCM: merges counted with the kernel of the 3-D ball, 1 / (4/3 π r³), instead
     /// of the disk's 1 / (π r²) (false when correct).
     pub merge_kernel_ball: bool,
+    /// Light tracing, BDPT and the merging methods: a subpath goes on past a hit whose area
+    /// density vanishes in f32 (`subpath::density_vanishes`) instead of ending there, and its
+    /// MIS quantities become NaN (false when correct).
+    pub continue_at_vanishing_density: bool,
 }
 
 impl Faults {
@@ -56,6 +60,7 @@ impl Faults {
         grey_indirect: false,
         importance_missing_cos: false,
         merge_kernel_ball: false,
+        continue_at_vanishing_density: false,
     };
 }
 

@@ -64,7 +64,8 @@ pub struct Frame {
     pub band_pixels: u32,
     /// The first light subpath of the wave (the pool's path heads are the wave's).
     pub wave_origin: u32,
-    pub pad: u32,
+    /// `Faults::continue_at_vanishing_density` as 0 or 1 (test-only).
+    pub continue_at_vanishing_density: u32,
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -453,7 +454,7 @@ impl GpuRenderer {
             film_rows: height,
             band_pixels: width * height,
             wave_origin: 0,
-            pad: 0,
+            continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
