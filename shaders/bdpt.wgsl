@@ -154,8 +154,14 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             // here: Lambert's f = rho / pi, and the densities of its direction use its own
             // normal's cosine, which stays positive across the disk. (The CPU begins this
             // query at the hit and prefetches it during steps 4 and 5; here other invocations
-            // hide its memory latency, and the query is the same.)
-            if merges() {
+            // hide its memory latency, and the query is the same.) VCM's query is rouletted by
+            // the bound on what it can add: run with probability q, divided by q. Every wave of
+            // merging draws the same number, so a vertex merges with all waves or none.
+            var q_merge = 1.0;
+            if merges() && connects() {
+                q_merge = merge_survival(m, iteration_merge(), pdf_rev, max_element(throughput * albedo), frame.merge_rr_threshold);
+            }
+            if merges() && (q_merge >= 1.0 || draw4(sampler, dim_merge(bounce)).x < q_merge) {
                 var gathered = vec3<f32>(0.0);
                 let q = query_buckets(hit.p);
                 for (var j = 0u; j < q.n; j++) {
@@ -180,7 +186,10 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                         gathered += v.throughput * w;
                     }
                 }
-                radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization);
+                if frame.merge_rr_undivided != 0u {
+                    q_merge = 1.0;
+                }
+                radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization / q_merge);
                 if !connects() {
                     // SPPM merges at the first diffuse vertex only.
                     break;

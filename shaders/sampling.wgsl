@@ -50,6 +50,11 @@ fn dim_connection(bounce: u32, vertex: u32) -> u32 {
     return 0x60000000u + (bounce << 14u) + vertex / 4u;
 }
 
+// VCM's Russian roulette on the merge query at camera bounce k (lane 0).
+fn dim_merge(bounce: u32) -> u32 {
+    return 0x58000000u + bounce;
+}
+
 // Light subpath bounce k: Russian roulette on the splat's visibility ray (lane 0).
 fn dim_splat(bounce: u32) -> u32 {
     return 0x50000000u + bounce;

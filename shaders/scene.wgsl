@@ -107,6 +107,11 @@ struct Frame {
     wave_origin: u32,
     // Test-only: a subpath goes on past a hit whose density vanishes (`Faults`), 0 or 1.
     continue_at_vanishing_density: u32,
+    // tau of VCM's Russian roulette on merge queries (0 but for VCM).
+    merge_rr_threshold: f32,
+    // Test-only: merge queries rouletted but not divided by their probability, 0 or 1.
+    merge_rr_undivided: u32,
+    pad: vec2<u32>,
 }
 
 const METHOD_PATH: u32 = 0u;

@@ -159,6 +159,21 @@ fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f
 // vertex and every strategy earlier on either subpath.
 fn weight_merge(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32) -> f32 {
     let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
-    let w_camera = camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev);
-    return 1.0 / (w_light + 1.0 + w_camera);
+    return 1.0 / (w_light + 1.0 + merge_camera_share(camera, merge, camera_rev));
+}
+
+// The camera side's part of weight_merge's denominator, which does not depend on the photon.
+fn merge_camera_share(camera: SubpathMis, merge: MergeMis, camera_rev: f32) -> f32 {
+    return camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev);
+}
+
+// The probability of running a camera vertex's merge query (VCM): the query adds at most
+// max(beta rho) / (1 + the camera side's share) of the light arriving there; below tau it runs
+// with probability bound / tau (subpath.rs: merge_survival).
+fn merge_survival(camera: SubpathMis, merge: MergeMis, camera_rev: f32, throughput_albedo: f32, threshold: f32) -> f32 {
+    let bound = throughput_albedo / (1.0 + merge_camera_share(camera, merge, camera_rev));
+    if bound >= threshold || threshold <= 0.0 {
+        return 1.0;
+    }
+    return bound / threshold;
 }

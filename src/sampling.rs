@@ -87,6 +87,12 @@ pub fn dim_connection(bounce: u32, vertex: u32) -> u32 {
 pub fn dim_splat(bounce: u32) -> u32 {
     0x5000_0000u32.wrapping_add(bounce)
 }
+/// VCM's Russian roulette on the merge query at camera bounce `bounce` (lane 0;
+/// `subpath::merge_survival`).
+#[inline]
+pub fn dim_merge(bounce: u32) -> u32 {
+    0x5800_0000u32.wrapping_add(bounce)
+}
 /// The most shadow rays per diffuse vertex (`--light-samples`): `j` fits a byte of
 /// [`dim_light_extra`].
 pub const MAX_LIGHT_SAMPLES: u32 = 256;

@@ -394,6 +394,61 @@ pub fn weight_merge(
     camera_rev: f32,
 ) -> f32 {
     let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
-    let w_camera = camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev);
-    1.0 / (w_light + 1.0 + w_camera)
+    1.0 / (w_light + 1.0 + merge_camera_share(camera, merge, camera_rev))
+}
+
+/// The camera side's part of [`weight_merge`]'s denominator: the strategies that connect or
+/// merge on the camera subpath, relative to merging here. It does not depend on the photon.
+#[inline]
+pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32) -> f32 {
+    camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev)
+}
+
+/// τ of VCM's Russian roulette on merge queries ([`merge_survival`]), as a share of the
+/// camera subpath's throughput. Measured by setting it (tncg15_room and glass_room, 256x256,
+/// 30 s on 2 cores, seeds 43 and 44, relMSE against the references of `docs/methods.sh
+/// references`, the values of τ alternated in one run):
+///
+/// | τ | 0 (no roulette) | 0.05 | 0.1 | 0.2 |
+/// | --- | --- | --- | --- | --- |
+/// | tncg15_room iterations | 152, 150 | 172, 172 | 173, 170 | 178, 176 |
+/// | tncg15_room relMSE | 1.83e-3, 1.84e-3 | 1.65e-3, 1.64e-3 | 1.65e-3, 1.67e-3 | 1.63e-3, 1.64e-3 |
+/// | glass_room iterations | 184, 185 | 194, 206 | 197, 209 | 201, 207 |
+/// | glass_room relMSE | 1.59e-3, 1.59e-3 | 1.52e-3, 1.45e-3 | 1.51e-3, 1.44e-3 | 1.51e-3, 1.48e-3 |
+///
+/// Flat from 0.05 to 0.2; at 0.5 and 1 (another run) relMSE rose again, to 1.65e-3 and
+/// 1.88e-3 on tncg15_room, 1.54e-3 and 1.82e-3 on glass_room: the roulette's variance falls on
+/// dark pixels, which relMSE weighs most. At τ = 0.1, 57 % of the queries are skipped on both
+/// scenes, and the variance they add is 0.14 % and 0.11 % of the image's (summed over pixels,
+/// counted in a 16-iteration render).
+pub const MERGE_RR_THRESHOLD: f32 = 0.1;
+
+/// Russian roulette on the merge query of a camera vertex (VCM): the probability of running
+/// it. What a query adds is β ρ/π · Σ α_i w_i / (π r² N) over the photons i within r, and
+/// every photon's weight w_i = 1 / (w_light,i + 1 + w_camera) is at most 1 / (1 + w_camera),
+/// the camera side's share ([`merge_camera_share`]), which is known before the query. So
+/// b = max(β ρ) / (1 + w_camera) bounds the query's part of the pixel relative to the light
+/// that arrives there: it is small where the camera subpath carries little (deep, after dark
+/// surfaces) and where the other strategies take the paths that merging here would (a
+/// connection from the previous camera vertex, most of all). A query with b below
+/// τ = [`MERGE_RR_THRESHOLD`] runs with probability b / τ and is divided by it, which keeps
+/// the estimate unbiased (E[Q 1{u < q} / q] = Q) and adds at most (1/q − 1) Q² of variance.
+/// SPPM, whose merges are its only strategy, runs every query (τ = 0). A merge query is not a
+/// ray: it costs about 400 ns of memory latency on the CPU (docs/performance.md, "Photon
+/// merging's queries"), a third of a vcm iteration, and most of it is spent where the other
+/// strategies carry the light.
+#[inline]
+pub fn merge_survival(
+    camera: &SubpathMis,
+    merge: &MergeMis,
+    camera_rev: f32,
+    throughput_albedo: f32,
+    threshold: f32,
+) -> f32 {
+    let bound = throughput_albedo / (1.0 + merge_camera_share(camera, merge, camera_rev));
+    if bound >= threshold || threshold <= 0.0 {
+        1.0
+    } else {
+        bound / threshold
+    }
 }

@@ -116,7 +116,10 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             film_rows,
             band_pixels,
             wave_origin,
-            continue_at_vanishing_density
+            continue_at_vanishing_density,
+            merge_rr_threshold,
+            merge_rr_undivided,
+            pad
         }),
         rust_layout!(GridParams {
             min,

@@ -461,6 +461,29 @@ fn the_merging_furnace_rejects_a_ball_kernel() {
     }
 }
 
+const UNDIVIDED_ROULETTE: Faults = Faults {
+    merge_rr_undivided: true,
+    ..Faults::NONE
+};
+
+/// VCM's Russian roulette on merge queries (`subpath::merge_survival`) runs in the furnace, and
+/// the furnace sees it: queries rouletted but not divided by their survival probability lose
+/// the merged light of the queries they skip, and vcm's image falls below 1, on both backends.
+/// So `vcm_merging_furnace_is_exactly_1` also shows that the roulette, divided, is unbiased.
+#[test]
+fn the_merging_furnace_rejects_an_undivided_merge_roulette() {
+    let mut films = vec![("vcm", merging_furnace_cpu(Method::Vcm, UNDIVIDED_ROULETTE))];
+    films.extend(merging_furnace_gpu(Method::Vcm, UNDIVIDED_ROULETTE).map(|f| ("GPU vcm", f)));
+    for (what, film) in films {
+        let (mean, _, z) = image_mean_z(&film, [1.0; 3]);
+        eprintln!(
+            "{what} with an undivided merge roulette: mean {:.4}, z {:.1}",
+            mean[0], z[0]
+        );
+        assert!(z.iter().all(|&z| z < -4.0), "{what}: z {z:?}");
+    }
+}
+
 /// Path tracing and BDPT in the same furnace: the sphere emitter (uniform points on the sphere,
 /// area pdf 1 / (4π r²), normals flipped inward) is sampled and hit consistently.
 #[test]

@@ -35,10 +35,10 @@ use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::sampling::{dim_bsdf, dim_connection, dim_light, Sampler, DIM_CAMERA};
+use crate::sampling::{dim_bsdf, dim_connection, dim_light, dim_merge, Sampler, DIM_CAMERA};
 use crate::subpath::{
-    density_vanishes, shadow_survival, weight_connection, weight_emission, weight_merge,
-    weight_next_event, LightVertex, MergeMis, SubpathMis,
+    density_vanishes, merge_survival, shadow_survival, weight_connection, weight_emission,
+    weight_merge, weight_next_event, LightVertex, MergeMis, SubpathMis, MERGE_RR_THRESHOLD,
 };
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -185,10 +185,22 @@ impl CameraPass<'_> {
                 // step 4, so that its memory reads overlap with steps 4 and 5
                 // (`HashGrid::begin_query`; the CPU alone: a GPU hides the latency with other
                 // invocations).
-                let merging = self
-                    .photons
-                    .as_ref()
-                    .map(|photons| (photons, photons.grid.begin_query(hit.p)));
+                // Russian roulette on the query (VCM): run with probability q, divided by q.
+                let merging = self.photons.as_ref().and_then(|photons| {
+                    let q = if self.connects {
+                        merge_survival(
+                            &mis,
+                            &self.merge,
+                            pdf_rev,
+                            (throughput * albedo).max_element(),
+                            MERGE_RR_THRESHOLD,
+                        )
+                    } else {
+                        1.0
+                    };
+                    (q >= 1.0 || sampler.draw4(dim_merge(bounce))[0] < q)
+                        .then(|| (photons, photons.grid.begin_query(hit.p), q))
+                });
 
                 // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
                 // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
@@ -216,7 +228,7 @@ impl CameraPass<'_> {
                     radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
                 }
 
-                if let Some((photons, query)) = &merging {
+                if let Some((photons, query, _)) = &merging {
                     photons.grid.prefetch_entries(query);
                 }
 
@@ -268,7 +280,7 @@ impl CameraPass<'_> {
                 // f α, weighted against every other strategy (SPPM: 1). The photon is taken
                 // as arrived here: Lambert's f = ρ/π, and the densities of its direction
                 // use its own normal's cosine, which stays positive across the disk.
-                if let Some((photons, query)) = &merging {
+                if let Some((photons, query, q)) = &merging {
                     let mut gathered = Vec3::ZERO;
                     photons.grid.finish_query(query, |i| {
                         let v = &photons.vertices[i as usize];
@@ -295,8 +307,9 @@ impl CameraPass<'_> {
                         };
                         gathered += Vec3::from(v.throughput) * w;
                     });
+                    let q = if faults.merge_rr_undivided { 1.0 } else { *q };
                     radiance +=
-                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization);
+                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization / q);
                     if !self.connects {
                         // SPPM merges at the first diffuse vertex only.
                         break;

@@ -51,6 +51,9 @@ pub struct Faults {
     /// density vanishes in f32 (`subpath::density_vanishes`) instead of ending there, and its
     /// MIS quantities become NaN (false when correct).
     pub continue_at_vanishing_density: bool,
+    /// VCM: merge queries rouletted (`subpath::merge_survival`) but not divided by their
+    /// survival probability (false when correct).
+    pub merge_rr_undivided: bool,
 }
 
 impl Faults {
@@ -61,6 +64,7 @@ impl Faults {
         importance_missing_cos: false,
         merge_kernel_ball: false,
         continue_at_vanishing_density: false,
+        merge_rr_undivided: false,
     };
 }
 

@@ -16,7 +16,7 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
-/// which tile, the method and its light pass, the film band, and the test-only faults. Ten
+/// which tile, the method and its light pass, the film band, and the test-only faults. Eleven
 /// vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
@@ -66,6 +66,12 @@ pub struct Frame {
     pub wave_origin: u32,
     /// `Faults::continue_at_vanishing_density` as 0 or 1 (test-only).
     pub continue_at_vanishing_density: u32,
+    /// τ of VCM's Russian roulette on merge queries (`subpath::MERGE_RR_THRESHOLD`; 0 but for
+    /// VCM).
+    pub merge_rr_threshold: f32,
+    /// `Faults::merge_rr_undivided` as 0 or 1 (test-only).
+    pub merge_rr_undivided: u32,
+    pub pad: [u32; 2],
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -455,6 +461,13 @@ impl GpuRenderer {
             band_pixels: width * height,
             wave_origin: 0,
             continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
+            merge_rr_threshold: if method == Method::Vcm {
+                crate::subpath::MERGE_RR_THRESHOLD
+            } else {
+                0.0
+            },
+            merge_rr_undivided: faults.merge_rr_undivided as u32,
+            pad: [0; 2],
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
