@@ -68,6 +68,11 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     let bidirectional = frame.method != METHOD_LIGHT;
     let stores = frame.method != METHOD_LIGHT;
     let splats_to_camera = frame.method != METHOD_SPPM;
+    // Where roulette starts: earlier where camera vertices connect to this subpath's.
+    var rr_start = RR_START_BOUNCE;
+    if frame.method == METHOD_BDPT || frame.method == METHOD_VCM {
+        rr_start = LIGHT_SUBPATH_RR_START_BOUNCE;
+    }
     let camera = frame.camera;
     atomicStore(&tallies[path_head(path)], NO_VERTEX);
     // The last vertex stored, and whether the pool ran out (then nothing more is stored).
@@ -180,9 +185,10 @@ fn trace_light_path(sampler: Sampler, path: u32) {
         }
         ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
 
-        // Step 7 - Russian roulette, as on camera paths: from bounce RR_START_BOUNCE on,
-        // continue with probability q = min(max(scattered), 0.95) and divide by q.
-        if bounce >= RR_START_BOUNCE {
+        // Step 7 - Russian roulette, as on camera paths but from bounce rr_start on
+        // (LIGHT_SUBPATH_RR_START_BOUNCE for BDPT and VCM, RR_START_BOUNCE otherwise): continue
+        // with probability q = min(max(scattered), 0.95) and divide by q.
+        if bounce >= rr_start {
             let q = min(max_element(scattered), RR_MAX_SURVIVAL);
             if u.w >= q {
                 break;

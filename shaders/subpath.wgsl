@@ -27,6 +27,10 @@ struct LightVertex {
 
 const NO_VERTEX: u32 = 0xffffffffu;
 
+// The bounce from which BDPT's and VCM's light subpaths are rouletted (src/subpath.rs says why
+// it is earlier than the path tracer's RR_START_BOUNCE).
+const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1u;
+
 // The light pass's stored vertices (a pool shared by the light subpaths of one wave, each
 // subpath a list through `next`), the order-independent tallies (splat.wgsl), and each pixel's
 // camera-subpath radiance of the iteration, waiting for the resolve pass.

@@ -404,6 +404,33 @@ pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32
     camera.d_vcm * merge.vc + camera.d_vm * mis(camera_rev)
 }
 
+/// The bounce from which BDPT and VCM roulette their light subpaths, with the path tracer's
+/// survival probability (`cpu::path::RR_MAX_SURVIVAL`); their camera subpaths, and the light
+/// subpaths of light tracing and SPPM, start at the path tracer's `RR_START_BOUNCE` (3). The
+/// reason is cost: a light vertex of BDPT or VCM is connected to by every camera vertex of its
+/// pixel (a shadow ray each) and merged with, so ending more of the light subpaths that carry
+/// little buys more iterations; in light tracing a light vertex costs one splat, in SPPM a grid
+/// entry. Measured by setting the start on each side (vcm, 256x256, 20 s on 2 cores, seeds 11
+/// and 12, all in one sweep; relMSE against the references of `docs/methods.sh references` minus
+/// their noise):
+///
+/// | start: camera, light subpaths | 3, 3 (before) | 3, 2 | 3, 1 | 3, 0 | 1, 1 | 1, 3 |
+/// | --- | --- | --- | --- | --- | --- | --- |
+/// | tncg15_room, seeds 11, 12 | 2.46, 2.50 | | 2.16, 2.30 | | 2.24, 2.26 | 2.40, 2.41 |
+/// | tncg15_room, seeds 13, 14 | 2.38, 2.48 | 2.32, 2.28 | 2.41, 2.33 | 2.35, 2.37 | | |
+/// | glass_room, seeds 11, 12 | 2.22, 2.20 | | 2.17, 2.17 | | 2.22, 2.09 | 2.15, 2.14 |
+/// | glass_room, seeds 13, 14 | 2.17, 2.30 | 2.16, 2.15 | 2.04, 2.11 | 2.04, 2.19 | | |
+///
+/// (relMSE in units of 1e-3; the references' noise, 1.3e-4 and 1.0e-4, subtracted.) Light
+/// subpaths from bounce 1: 7 of the 8 same-seed pairs lower, −6 % on tncg15_room and −5 % on
+/// glass_room in the mean, for 5 – 15 % more iterations; from 0 or 2 no better. Starting the
+/// camera subpaths earlier too (1, 1) gains nothing more, and it renormalises β early, so that
+/// fewer merge queries fall under the merge roulette's threshold and the furnace no longer sees
+/// that roulette undivided (`tests/photon_merging.rs`); light tracing from bounce 1 gave its
+/// splats heavier tails (its batch-means χ² fell below its interval, `tests/standard_error.rs`)
+/// for a vertex that costs one splat.
+pub const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1;
+
 /// τ of VCM's Russian roulette on merge queries ([`merge_survival`]), as a share of the
 /// camera subpath's throughput. Measured by setting it (tncg15_room and glass_room, 256x256,
 /// 30 s on 2 cores, seeds 43 and 44, relMSE against the references of `docs/methods.sh

@@ -177,3 +177,83 @@ fn a_reordered_field_is_caught() {
     let (_, wfields) = wgsl_layout(&module, "Emitter");
     assert_ne!(fields, wfields);
 }
+
+/// The value of the WGSL module-scope constant `name`, if it is a u32 or f32 literal.
+fn wgsl_constant(module: &naga::Module, name: &str) -> Option<f64> {
+    let constant = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))?
+        .1;
+    match module.global_expressions[constant.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => Some(f64::from(v)),
+        naga::Expression::Literal(naga::Literal::F32(v)) => Some(f64::from(v)),
+        _ => None,
+    }
+}
+
+/// The constants that the WGSL declares again, with their Rust values (each exact in f64).
+fn shared_constants() -> Vec<(&'static str, f64)> {
+    use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
+    use hexray::flat::{
+        EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
+        PRIM_SPHERE_BIT,
+    };
+    use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
+    use hexray::splat::FRACTION_BITS;
+    use hexray::subpath::{NO_VERTEX, LIGHT_SUBPATH_RR_START_BOUNCE};
+    vec![
+        ("RR_START_BOUNCE", f64::from(RR_START_BOUNCE)),
+        ("RR_MAX_SURVIVAL", f64::from(RR_MAX_SURVIVAL)),
+        ("LIGHT_SUBPATH_RR_START_BOUNCE", f64::from(LIGHT_SUBPATH_RR_START_BOUNCE)),
+        ("KIND_DIFFUSE", f64::from(KIND_DIFFUSE)),
+        ("KIND_MIRROR", f64::from(KIND_MIRROR)),
+        ("KIND_GLASS", f64::from(KIND_GLASS)),
+        ("KIND_EMITTER", f64::from(KIND_EMITTER)),
+        ("NOT_AN_EMITTER", f64::from(NOT_AN_EMITTER)),
+        ("PRIM_SPHERE_BIT", f64::from(PRIM_SPHERE_BIT)),
+        ("EMPTY_SLOT", f64::from(EMPTY_SLOT)),
+        ("NO_VERTEX", f64::from(NO_VERTEX)),
+        ("DIM_CAMERA", f64::from(DIM_CAMERA)),
+        ("DIM_EMISSION", f64::from(DIM_EMISSION)),
+        ("DIM_EMISSION_DIR", f64::from(DIM_EMISSION_DIR)),
+        ("FRACTION_BITS", f64::from(FRACTION_BITS)),
+    ]
+}
+
+/// Every shared constant whose WGSL declaration is missing or differs from Rust's, as a line.
+fn constant_mismatches(wgsl: &str) -> Vec<String> {
+    let (module, _) = validate(wgsl).unwrap();
+    shared_constants()
+        .into_iter()
+        .filter_map(|(name, rust)| match wgsl_constant(&module, name) {
+            Some(w) if w == rust => None,
+            w => Some(format!("{name}: Rust {rust}, WGSL {w:?}")),
+        })
+        .collect()
+}
+
+/// The constants that steer both backends' estimators (roulette, material kinds, random-stream
+/// blocks, the splats' fixed point) are written in Rust and again in WGSL; naga's reflection of
+/// the WGSL must give Rust's value for each.
+#[test]
+fn shared_constants_match_their_wgsl_declarations() {
+    let mismatches = constant_mismatches(&source(Residency::Storage, ArrayLengths::default()));
+    assert!(mismatches.is_empty(), "{mismatches:#?}");
+}
+
+/// The test has power: a shader whose roulette starts at another bounce than Rust's is caught.
+#[test]
+fn a_drifted_constant_is_caught() {
+    let wgsl = source(Residency::Storage, ArrayLengths::default());
+    let start = hexray::subpath::LIGHT_SUBPATH_RR_START_BOUNCE;
+    let declared = format!("const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = {start}u;");
+    assert!(wgsl.contains(&declared));
+    let drifted = wgsl.replace(
+        &declared,
+        &format!("const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = {}u;", start + 1),
+    );
+    let mismatches = constant_mismatches(&drifted);
+    assert_eq!(mismatches.len(), 1, "{mismatches:#?}");
+    assert!(mismatches[0].starts_with("LIGHT_SUBPATH_RR_START_BOUNCE"));
+}

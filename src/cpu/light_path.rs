@@ -31,7 +31,7 @@ use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EM
 use crate::splat::Splats;
 use crate::subpath::{
     density_vanishes, shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex,
-    MergeMis, SubpathMis, NO_VERTEX,
+    MergeMis, SubpathMis, LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX,
 };
 use glam::Vec3;
 
@@ -138,6 +138,12 @@ impl LightPass<'_> {
         let n_paths = self.n_light_paths as f32;
         let stores = self.mode != LightPassMode::LightTracing;
         let splats_to_camera = self.mode != LightPassMode::PhotonMapping;
+        // Where roulette starts: earlier where camera vertices connect to this subpath's.
+        let rr_start = if self.mode == LightPassMode::Bidirectional {
+            LIGHT_SUBPATH_RR_START_BOUNCE
+        } else {
+            RR_START_BOUNCE
+        };
         let mut rays = 0u64;
 
         // Step 1 - emission: an emitter point chosen by power, uniformly on its area, and a
@@ -284,9 +290,10 @@ impl LightPass<'_> {
                 d: bs.wi,
             };
 
-            // Step 7 - Russian roulette, as on camera paths: from bounce RR_START_BOUNCE on,
+            // Step 7 - Russian roulette, as on camera paths but from bounce rr_start on
+            // (LIGHT_SUBPATH_RR_START_BOUNCE for BDPT and VCM, RR_START_BOUNCE otherwise):
             // continue with probability q = min(max(scattered), 0.95) and divide by q.
-            if bounce >= RR_START_BOUNCE {
+            if bounce >= rr_start {
                 let q = scattered.max_element().min(RR_MAX_SURVIVAL);
                 if u[3] >= q {
                     break;
