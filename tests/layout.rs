@@ -201,11 +201,14 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
     };
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
-    use hexray::subpath::{NO_VERTEX, LIGHT_SUBPATH_RR_START_BOUNCE};
+    use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
     vec![
         ("RR_START_BOUNCE", f64::from(RR_START_BOUNCE)),
         ("RR_MAX_SURVIVAL", f64::from(RR_MAX_SURVIVAL)),
-        ("LIGHT_SUBPATH_RR_START_BOUNCE", f64::from(LIGHT_SUBPATH_RR_START_BOUNCE)),
+        (
+            "LIGHT_SUBPATH_RR_START_BOUNCE",
+            f64::from(LIGHT_SUBPATH_RR_START_BOUNCE),
+        ),
         ("KIND_DIFFUSE", f64::from(KIND_DIFFUSE)),
         ("KIND_MIRROR", f64::from(KIND_MIRROR)),
         ("KIND_GLASS", f64::from(KIND_GLASS)),
