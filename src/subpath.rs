@@ -410,9 +410,9 @@ pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32
 /// reason is cost: a light vertex of BDPT or VCM is connected to by every camera vertex of its
 /// pixel (a shadow ray each) and merged with, so ending more of the light subpaths that carry
 /// little buys more iterations; in light tracing a light vertex costs one splat, in SPPM a grid
-/// entry. Measured by setting the start on each side (vcm, 256x256, 20 s on 2 cores, seeds 11
-/// and 12, all in one sweep; relMSE against the references of `docs/methods.sh references` minus
-/// their noise):
+/// entry. Measured by setting the start on each side (vcm, 256x256, 20 s on 2 cores, in two
+/// sweeps, seeds 11 and 12, then 13 and 14, each setting with "3, 3" in the same sweep; relMSE
+/// against the references of `docs/methods.sh references` minus their noise):
 ///
 /// | start: camera, light subpaths | 3, 3 (before) | 3, 2 | 3, 1 | 3, 0 | 1, 1 | 1, 3 |
 /// | --- | --- | --- | --- | --- | --- | --- |
@@ -424,11 +424,12 @@ pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32
 /// (relMSE in units of 1e-3; the references' noise, 1.3e-4 and 1.0e-4, subtracted.) Light
 /// subpaths from bounce 1: 7 of the 8 same-seed pairs lower, −6 % on tncg15_room and −5 % on
 /// glass_room in the mean, for 5 – 15 % more iterations; from 0 or 2 no better. Starting the
-/// camera subpaths earlier too (1, 1) gains nothing more, and it renormalises β early, so that
-/// fewer merge queries fall under the merge roulette's threshold and the furnace no longer sees
-/// that roulette undivided (`tests/photon_merging.rs`); light tracing from bounce 1 gave its
-/// splats heavier tails (its batch-means χ² fell below its interval, `tests/standard_error.rs`)
-/// for a vertex that costs one splat.
+/// camera subpaths early too (1, 1) gains nothing more and costs a test its power: dividing β by
+/// q from bounce 1 keeps it near 1, fewer merge queries fall under the merge roulette's
+/// threshold, and the merging furnace no longer tells that roulette undivided (z −1.6, against
+/// −31; `tests/photon_merging.rs`). Light tracing from bounce 1 moved its batch-means χ² below
+/// its interval (319.9 against [330.0, 475.5], `tests/standard_error.rs`), probably the heavier
+/// tails of splats divided by q early; its vertex costs one splat, so it keeps bounce 3.
 pub const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1;
 
 /// τ of VCM's Russian roulette on merge queries ([`merge_survival`]), as a share of the
