@@ -69,10 +69,11 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     let stores = frame.method != METHOD_LIGHT;
     let splats_to_camera = frame.method != METHOD_SPPM;
     // Where roulette starts: earlier where camera vertices connect to this subpath's.
-    var rr_start = RR_START_BOUNCE;
-    if frame.method == METHOD_BDPT || frame.method == METHOD_VCM {
-        rr_start = LIGHT_SUBPATH_RR_START_BOUNCE;
-    }
+    let rr_start = select(
+        RR_START_BOUNCE,
+        LIGHT_SUBPATH_RR_START_BOUNCE,
+        frame.method == METHOD_BDPT || frame.method == METHOD_VCM,
+    );
     let camera = frame.camera;
     atomicStore(&tallies[path_head(path)], NO_VERTEX);
     // The last vertex stored, and whether the pool ran out (then nothing more is stored).

@@ -192,6 +192,13 @@ fn wgsl_constant(module: &naga::Module, name: &str) -> Option<f64> {
     }
 }
 
+/// (name, value) of Rust constants, each name written once, the value exact in f64.
+macro_rules! rust_constants {
+    ($($c:ident),* $(,)?) => {
+        vec![$((stringify!($c), f64::from($c))),*]
+    };
+}
+
 /// The constants that the WGSL declares again, with their Rust values (each exact in f64).
 fn shared_constants() -> Vec<(&'static str, f64)> {
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
@@ -202,26 +209,23 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
     use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
-    vec![
-        ("RR_START_BOUNCE", f64::from(RR_START_BOUNCE)),
-        ("RR_MAX_SURVIVAL", f64::from(RR_MAX_SURVIVAL)),
-        (
-            "LIGHT_SUBPATH_RR_START_BOUNCE",
-            f64::from(LIGHT_SUBPATH_RR_START_BOUNCE),
-        ),
-        ("KIND_DIFFUSE", f64::from(KIND_DIFFUSE)),
-        ("KIND_MIRROR", f64::from(KIND_MIRROR)),
-        ("KIND_GLASS", f64::from(KIND_GLASS)),
-        ("KIND_EMITTER", f64::from(KIND_EMITTER)),
-        ("NOT_AN_EMITTER", f64::from(NOT_AN_EMITTER)),
-        ("PRIM_SPHERE_BIT", f64::from(PRIM_SPHERE_BIT)),
-        ("EMPTY_SLOT", f64::from(EMPTY_SLOT)),
-        ("NO_VERTEX", f64::from(NO_VERTEX)),
-        ("DIM_CAMERA", f64::from(DIM_CAMERA)),
-        ("DIM_EMISSION", f64::from(DIM_EMISSION)),
-        ("DIM_EMISSION_DIR", f64::from(DIM_EMISSION_DIR)),
-        ("FRACTION_BITS", f64::from(FRACTION_BITS)),
-    ]
+    rust_constants!(
+        RR_START_BOUNCE,
+        RR_MAX_SURVIVAL,
+        LIGHT_SUBPATH_RR_START_BOUNCE,
+        KIND_DIFFUSE,
+        KIND_MIRROR,
+        KIND_GLASS,
+        KIND_EMITTER,
+        NOT_AN_EMITTER,
+        PRIM_SPHERE_BIT,
+        EMPTY_SLOT,
+        NO_VERTEX,
+        DIM_CAMERA,
+        DIM_EMISSION,
+        DIM_EMISSION_DIR,
+        FRACTION_BITS,
+    )
 }
 
 /// Every shared constant whose WGSL declaration is missing or differs from Rust's, as a line.
