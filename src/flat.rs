@@ -182,6 +182,9 @@ pub struct FlatScene {
     /// The CPU's alone: the leaves' triangles four to a SIMD pack (`bvh::triangle_packs`),
     /// derived from `triangles` and `prims`; the shader reads those instead.
     pub packs: Vec<TrianglePack>,
+    /// The CPU's alone: the tree collapsed to eight-wide nodes (`wide_bvh::collapse`), which
+    /// the CPU traverses; the shader traverses `nodes`.
+    pub wide: Vec<crate::wide_bvh::WideNode>,
     /// Seconds the BVH build took (`bvh::build`, not the SIMD packs), for logs.
     pub bvh_seconds: f64,
 }
@@ -275,6 +278,7 @@ impl FlatScene {
         FlatScene {
             bvh_seconds,
             packs: bvh::triangle_packs(&triangles, &prims),
+            wide: crate::wide_bvh::collapse(&nodes),
             triangles,
             spheres,
             materials,

@@ -32,3 +32,4 @@ pub mod scene;
 pub mod splat;
 pub mod stats;
 pub mod subpath;
+pub mod wide_bvh;

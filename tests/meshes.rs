@@ -709,6 +709,7 @@ fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
     let (nodes, prims) = bvh::build(&tris, &[]);
     let scene = FlatScene {
         packs: bvh::triangle_packs(&tris, &prims),
+        wide: hexray::wide_bvh::collapse(&nodes),
         triangles: tris.clone(),
         nodes,
         prims,

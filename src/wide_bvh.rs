@@ -1,0 +1,296 @@
+//! The CPU's eight-wide BVH: the shared four-wide tree (`FlatScene::nodes`, which the shader
+//! traverses) collapsed once more, so that one node visit tests up to eight child boxes.
+//!
+//! The traversal's cost on the CPU is the latency of each node's test-decide-load chain, not the
+//! instruction count (docs/performance.md): a node of eight children is two independent
+//! four-wide slab tests, which the core runs side by side in about the time of one, and the
+//! tree has about half the levels. The leaves are the four-wide tree's own (the same `prims`
+//! ranges, starting at multiples of four for the triangle packs), in the same slot order, so
+//! a traversal reports the same hits, and the nearest is the same primitive but for exact ties
+//! in t.
+
+use crate::flat::{BvhNode, EMPTY_SLOT};
+use crate::geometry::gamma;
+use arrayvec::ArrayVec;
+use glam::{Vec3, Vec4};
+
+/// The slots of a wide node.
+pub const WIDTH: usize = 8;
+/// Its rows of four slots, each one four-wide slab test.
+const ROWS: usize = WIDTH / 4;
+
+/// Eight child boxes as structure of arrays (two four-wide halves), and per child an interior
+/// node's index in the wide array or a leaf's first entry in `prims` with its count, as in
+/// [`BvhNode`] (count 0: interior; [`EMPTY_SLOT`]: nothing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WideNode {
+    pub min_x: [Vec4; ROWS],
+    pub max_x: [Vec4; ROWS],
+    pub min_y: [Vec4; ROWS],
+    pub max_y: [Vec4; ROWS],
+    pub min_z: [Vec4; ROWS],
+    pub max_z: [Vec4; ROWS],
+    pub child: [u32; WIDTH],
+    pub count: [u32; WIDTH],
+}
+
+impl Default for WideNode {
+    /// A node of empty slots: inverted boxes, which no ray enters.
+    fn default() -> Self {
+        let (lo, hi) = ([Vec4::INFINITY; ROWS], [Vec4::NEG_INFINITY; ROWS]);
+        WideNode {
+            min_x: lo,
+            max_x: hi,
+            min_y: lo,
+            max_y: hi,
+            min_z: lo,
+            max_z: hi,
+            child: [0; WIDTH],
+            count: [EMPTY_SLOT; WIDTH],
+        }
+    }
+}
+
+/// One child slot of a four-wide node: its box, its `child` and its `count`.
+#[derive(Clone, Copy)]
+struct Slot {
+    lo: Vec3,
+    hi: Vec3,
+    child: u32,
+    count: u32,
+}
+
+impl Slot {
+    fn area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+fn slots(node: &BvhNode) -> ArrayVec<Slot, 4> {
+    (0..4)
+        .filter(|&c| node.count[c] != EMPTY_SLOT)
+        .map(|c| {
+            let (lo, hi) = node.child_bounds(c);
+            Slot {
+                lo,
+                hi,
+                child: node.child[c],
+                count: node.count[c],
+            }
+        })
+        .collect()
+}
+
+/// The wide tree of a four-wide one, root first. Each wide node starts from a four-wide node's
+/// children and opens the interior child of largest surface area while its children fit in the
+/// eight slots (the collapse that made the four-wide tree of the binary one, `bvh::flatten`); an
+/// opened child's children take its place, so leaves keep their relative order.
+pub fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
+    let mut wide = Vec::with_capacity(nodes.len().div_ceil(2).max(1));
+    if !nodes.is_empty() {
+        append(nodes, 0, &mut wide);
+    }
+    wide
+}
+
+/// Appends the wide node made from four-wide node `index` and its descendants, depth first;
+/// returns its index.
+fn append(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+    let mut open: Vec<Slot> = slots(&nodes[index]).to_vec();
+    loop {
+        let widest = open
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| {
+                s.count == 0 && open.len() - 1 + slots(&nodes[s.child as usize]).len() <= WIDTH
+            })
+            .max_by(|a, b| a.1.area().total_cmp(&b.1.area()))
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let children = slots(&nodes[open[i].child as usize]);
+        open.splice(i..=i, children);
+    }
+    let at = wide.len();
+    wide.push(WideNode::default());
+    let mut node = WideNode::default();
+    for (c, s) in open.iter().enumerate() {
+        let (h, l) = (c / 4, c % 4);
+        node.min_x[h][l] = s.lo.x;
+        node.min_y[h][l] = s.lo.y;
+        node.min_z[h][l] = s.lo.z;
+        node.max_x[h][l] = s.hi.x;
+        node.max_y[h][l] = s.hi.y;
+        node.max_z[h][l] = s.hi.z;
+        node.count[c] = s.count;
+        node.child[c] = if s.count == 0 {
+            append(nodes, s.child as usize, wide)
+        } else {
+            s.child
+        };
+    }
+    wide[at] = node;
+    at as u32
+}
+
+/// The slab test of a ray against a wide node's boxes, row by row as `geometry::intersect_aabb4`
+/// does it for four (the same operations per lane, with the same far-distance margin): per
+/// slot, the distance at which the ray enters the box (0 when it starts inside) and a mask of
+/// the occupied slots it enters no later than `t_max`. The rows do not depend on each other, so
+/// the core overlaps their tests.
+#[inline]
+pub fn intersect_wide(node: &WideNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f32; WIDTH], u32) {
+    let slab = |lo: Vec4, hi: Vec4, o: f32, inv_d: f32| {
+        let t_lo = (lo - Vec4::splat(o)) * inv_d;
+        let t_hi = (hi - Vec4::splat(o)) * inv_d;
+        (t_lo.min(t_hi), t_lo.max(t_hi))
+    };
+    let mut t_enter = [0.0; WIDTH];
+    let mut entered = 0;
+    for h in 0..ROWS {
+        let (near_x, far_x) = slab(node.min_x[h], node.max_x[h], o.x, inv_d.x);
+        let (near_y, far_y) = slab(node.min_y[h], node.max_y[h], o.y, inv_d.y);
+        let (near_z, far_z) = slab(node.min_z[h], node.max_z[h], o.z, inv_d.z);
+        let t_near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
+        let t_far = far_x.min(far_y).min(far_z) * (1.0 + 2.0 * gamma(3));
+        entered |= t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask() << (4 * h);
+        t_enter[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
+    }
+    let mut occupied = 0;
+    for (c, &count) in node.count.iter().enumerate() {
+        occupied |= u32::from(count != EMPTY_SLOT) << c;
+    }
+    (t_enter, entered & occupied)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flat::Triangle;
+
+    /// The leaves under four-wide node `index`, depth first in slot order, as (first entry,
+    /// count, box).
+    fn leaves4(nodes: &[BvhNode], index: usize, out: &mut Vec<(u32, u32, Vec3, Vec3)>) {
+        for s in slots(&nodes[index]) {
+            if s.count == 0 {
+                leaves4(nodes, s.child as usize, out);
+            } else {
+                out.push((s.child, s.count, s.lo, s.hi));
+            }
+        }
+    }
+
+    /// The same for the wide tree; also checks that every interior slot's box holds the boxes
+    /// of all the leaves under it.
+    fn leaves8(wide: &[WideNode], index: usize, out: &mut Vec<(u32, u32, Vec3, Vec3)>) {
+        let node = &wide[index];
+        for c in (0..WIDTH).filter(|&c| node.count[c] != EMPTY_SLOT) {
+            let (h, l) = (c / 4, c % 4);
+            let lo = Vec3::new(node.min_x[h][l], node.min_y[h][l], node.min_z[h][l]);
+            let hi = Vec3::new(node.max_x[h][l], node.max_y[h][l], node.max_z[h][l]);
+            if node.count[c] == 0 {
+                let from = out.len();
+                leaves8(wide, node.child[c] as usize, out);
+                for &(_, _, a, b) in &out[from..] {
+                    assert!(
+                        lo.cmple(a).all() && b.cmple(hi).all(),
+                        "a slot's box is too small"
+                    );
+                }
+            } else {
+                out.push((node.child[c], node.count[c], lo, hi));
+            }
+        }
+    }
+
+    /// Whether the wide tree has exactly the four-wide tree's leaves, boxes and order.
+    fn same_leaves(nodes: &[BvhNode], wide: &[WideNode]) -> bool {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        leaves4(nodes, 0, &mut a);
+        leaves8(wide, 0, &mut b);
+        a == b
+    }
+
+    fn soup(n: u32) -> Vec<Triangle> {
+        let r = |i: u32, k: u32| {
+            crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, k, 5, 6])[0]) * 20.0
+        };
+        (0..n)
+            .map(|i| {
+                let c = Vec3::new(r(i, 0), r(i, 1), r(i, 2));
+                let v = |k| (c + Vec3::new(r(i, k), r(i, k + 1), r(i, k + 2)) * 0.05).into();
+                Triangle::new(v(3), v(6), v(9), 0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn collapse_keeps_every_leaf_its_box_and_its_order() {
+        for n in [1, 3, 5, 17, 300, 5000] {
+            let (nodes, _) = crate::bvh::build(&soup(n), &[]);
+            let wide = collapse(&nodes);
+            assert!(same_leaves(&nodes, &wide), "{n} triangles");
+        }
+    }
+
+    #[test]
+    fn collapse_halves_the_levels_of_a_large_tree() {
+        let (nodes, _) = crate::bvh::build(&soup(5000), &[]);
+        let wide = collapse(&nodes);
+        assert!(
+            wide.len() * 3 < nodes.len() * 2,
+            "{} wide nodes for {} four-wide ones",
+            wide.len(),
+            nodes.len()
+        );
+    }
+
+    /// The check above fails when a slot goes missing: it can tell a broken collapse.
+    #[test]
+    fn a_dropped_slot_is_caught() {
+        let (nodes, _) = crate::bvh::build(&soup(300), &[]);
+        let mut wide = collapse(&nodes);
+        let last = wide.len() - 1;
+        let c = (0..WIDTH)
+            .rev()
+            .find(|&c| wide[last].count[c] != EMPTY_SLOT)
+            .unwrap();
+        wide[last].count[c] = EMPTY_SLOT;
+        assert!(!same_leaves(&nodes, &wide));
+    }
+
+    /// The wide slab test gives, row by row, the four-wide test's entry distances and hits.
+    #[test]
+    fn the_wide_slab_test_is_the_four_wide_one_per_row() {
+        let (nodes, _) = crate::bvh::build(&soup(2000), &[]);
+        let wide = collapse(&nodes);
+        let node = &wide[0];
+        for i in 0..1000u32 {
+            let r = |k| crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, k, 7, 8])[0]);
+            let o = Vec3::new(r(0), r(1), r(2)) * 30.0 - 5.0;
+            let d = (Vec3::new(r(3), r(4), r(5)) - 0.5).normalize();
+            let inv_d = crate::geometry::safe_inverse(d);
+            let t_max = r(6) * 40.0;
+            let (t8, mask8) = intersect_wide(node, o, inv_d, t_max);
+            for h in 0..ROWS {
+                let mut four = BvhNode::default();
+                for l in 0..4 {
+                    four.min_x[l] = node.min_x[h][l];
+                    four.min_y[l] = node.min_y[h][l];
+                    four.min_z[l] = node.min_z[h][l];
+                    four.max_x[l] = node.max_x[h][l];
+                    four.max_y[l] = node.max_y[h][l];
+                    four.max_z[l] = node.max_z[h][l];
+                    four.count[l] = node.count[4 * h + l];
+                }
+                let (t4, mask4) = crate::geometry::intersect_aabb4(&four, o, inv_d, t_max);
+                assert_eq!(mask4, (mask8 >> (4 * h)) & 0xf);
+                for l in 0..4 {
+                    if mask4 >> l & 1 == 1 {
+                        assert_eq!(t4[l].to_bits(), t8[4 * h + l].to_bits());
+                    }
+                }
+            }
+        }
+    }
+}
