@@ -72,7 +72,9 @@ fn main() {
                 std::process::exit(2);
             }
         };
-        let flat = FlatScene::build(&scene);
+        let mut flat = FlatScene::build(&scene);
+        // The shader traverses the four-wide tree: count its nodes, not the CPU's wide ones.
+        flat.wide = hexray::wide_bvh::one_for_one(&flat.nodes);
         let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
         // Every pixel's paths, bounce by bounce, sample after sample.
         let paths: Vec<Vec<Vec<(u32, u32)>>> = (0..SIZE * SIZE)

@@ -89,27 +89,42 @@ fn slots(node: &BvhNode) -> ArrayVec<Slot, 4> {
 pub fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
     let mut wide = Vec::with_capacity(nodes.len().div_ceil(2).max(1));
     if !nodes.is_empty() {
-        append(nodes, 0, &mut wide);
+        append(nodes, 0, true, &mut wide);
     }
     wide
 }
 
-/// Appends the wide node made from four-wide node `index` and its descendants, depth first;
-/// returns its index.
-fn append(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+/// The four-wide tree itself as wide nodes, one for one, each with its four slots in the first
+/// row and the other rows empty: the CPU's traversal over it visits exactly the nodes, in
+/// exactly the order, that the shader's traversal of the four-wide tree visits, so
+/// `examples/lane_occupancy.rs` counts the shader's work with it.
+pub fn one_for_one(nodes: &[BvhNode]) -> Vec<WideNode> {
+    let mut wide = Vec::with_capacity(nodes.len());
+    if !nodes.is_empty() {
+        append(nodes, 0, false, &mut wide);
+    }
+    wide
+}
+
+/// Appends the wide node made from four-wide node `index` (its children opened while they fit
+/// where `open_children`) and its descendants, depth first; returns its index.
+fn append(nodes: &[BvhNode], index: usize, open_children: bool, wide: &mut Vec<WideNode>) -> u32 {
     let mut open: Vec<Slot> = slots(&nodes[index]).to_vec();
-    loop {
-        let widest = open
-            .iter()
+    // The interior child of largest surface area whose children fit in its place, if any.
+    let widest = |open: &[Slot]| {
+        open.iter()
             .enumerate()
             .filter(|(_, s)| {
                 s.count == 0 && open.len() - 1 + slots(&nodes[s.child as usize]).len() <= WIDTH
             })
             .max_by(|a, b| a.1.area().total_cmp(&b.1.area()))
-            .map(|(i, _)| i);
-        let Some(i) = widest else { break };
-        let children = slots(&nodes[open[i].child as usize]);
-        open.splice(i..=i, children);
+            .map(|(i, _)| i)
+    };
+    if open_children {
+        while let Some(i) = widest(&open) {
+            let children = slots(&nodes[open[i].child as usize]);
+            open.splice(i..=i, children);
+        }
     }
     let at = wide.len();
     wide.push(WideNode::default());
@@ -124,7 +139,7 @@ fn append(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
         node.max_z[h][l] = s.hi.z;
         node.count[c] = s.count;
         node.child[c] = if s.count == 0 {
-            append(nodes, s.child as usize, wide)
+            append(nodes, s.child as usize, open_children, wide)
         } else {
             s.child
         };
@@ -243,6 +258,17 @@ mod tests {
             wide.len(),
             nodes.len()
         );
+    }
+
+    #[test]
+    fn one_for_one_keeps_every_node_as_it_is() {
+        let (nodes, _) = crate::bvh::build(&soup(300), &[]);
+        let wide = one_for_one(&nodes);
+        assert_eq!(wide.len(), nodes.len());
+        assert!(same_leaves(&nodes, &wide));
+        assert!(wide
+            .iter()
+            .all(|n| n.count[4..].iter().all(|&c| c == EMPTY_SLOT)));
     }
 
     /// The check above fails when a slot goes missing: it can tell a broken collapse.
