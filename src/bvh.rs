@@ -23,7 +23,8 @@ const BINS: usize = 16;
 /// tree is no deeper, and the traversal pushes at most three children per level, so its stack
 /// never holds more than `3 * MAX_DEPTH` entries.
 const MAX_DEPTH: usize = 60;
-/// Entries in the CPU traversal stack; the WGSL stack is sized to the scene ([`stack_size`]).
+/// The most entries a traversal of the four-wide tree can push (three per level); the WGSL
+/// stack is sized to the scene ([`stack_size`]), which this bounds.
 pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 /// The CPU's traversal stack over the wide tree: at most seven children pushed per level, and
 /// the wide tree is no deeper than the four-wide one.
@@ -404,10 +405,9 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
 }
 
 /// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared
-/// four-wide tree collapsed to eight-wide nodes: 2 – 9 % more camera paths/s than the
+/// four-wide tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the
 /// four-wide tree it is made of, docs/performance.md). At each node the children's boxes are
-/// tested at once. The
-/// leaves among the hit children are tested first, so that their hits lower t_limit before
+/// tested at once. The leaves among the hit children are tested first, so that their hits lower t_limit before
 /// anything is pushed; then the nearest hit interior child is visited next and the others are
 /// pushed with their entry distances: a missed child is never pushed and a pushed one that a
 /// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
