@@ -735,24 +735,7 @@ mod tests {
 
     fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
         let (nodes, prims) = build(&tris, &spheres);
-        scene_with(tris, spheres, nodes, prims)
-    }
-
-    fn scene_with(
-        tris: Vec<Triangle>,
-        spheres: Vec<Sphere>,
-        nodes: Vec<BvhNode>,
-        prims: Vec<u32>,
-    ) -> FlatScene {
-        FlatScene {
-            packs: triangle_packs(&tris, &prims),
-            wide: crate::wide_bvh::collapse(&nodes),
-            triangles: tris,
-            spheres,
-            nodes,
-            prims,
-            ..Default::default()
-        }
+        FlatScene::from_tree(tris, spheres, nodes, prims)
     }
 
     /// The scene's nearest hit along `ray` and whether it blocks the segment (0, 1) are what
@@ -850,7 +833,7 @@ mod tests {
         let (nodes, prims) = flatten_root(&leaf, &info, Vec::new());
         assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
         assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
-        let scene = scene_with(tris.clone(), spheres.clone(), nodes, prims);
+        let scene = FlatScene::from_tree(tris.clone(), spheres.clone(), nodes, prims);
         for i in 0..2000u32 {
             let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 4.0;
             let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;

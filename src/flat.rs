@@ -277,14 +277,29 @@ impl FlatScene {
         let bvh_seconds = started.elapsed().as_secs_f64();
         FlatScene {
             bvh_seconds,
+            materials,
+            emitters,
+            ..FlatScene::from_tree(triangles, spheres, nodes, prims)
+        }
+    }
+
+    /// A scene of these primitives and this BVH (`bvh::build`'s), with what the CPU derives from
+    /// them (the triangle packs, the wide tree) and no materials or emitters: for tests and
+    /// tools that build a tree themselves.
+    pub fn from_tree(
+        triangles: Vec<Triangle>,
+        spheres: Vec<Sphere>,
+        nodes: Vec<BvhNode>,
+        prims: Vec<u32>,
+    ) -> FlatScene {
+        FlatScene {
             packs: bvh::triangle_packs(&triangles, &prims),
             wide: crate::wide_bvh::collapse(&nodes),
             triangles,
             spheres,
-            materials,
-            emitters,
             nodes,
             prims,
+            ..Default::default()
         }
     }
 

@@ -9,7 +9,7 @@
 //! that computed it. No fixed epsilon, and nothing proportional to the scene's size: the offset
 //! scales with the magnitude of the coordinates, which is what far-from-origin scenes need.
 
-use crate::flat::{BvhNode, Sphere, Triangle, EMPTY_SLOT};
+use crate::flat::{Sphere, Triangle};
 use glam::{Vec3, Vec3A, Vec4};
 
 /// Half an ulp of 1.0 in f32: the relative rounding error of one operation.
@@ -422,30 +422,34 @@ pub fn sphere_point_at(sphere: &Sphere, local: Vec3) -> (Vec3, Vec3) {
     (p, gamma(5) * local.abs() + gamma(2) * p.abs())
 }
 
-/// The slab test (Kay and Kajiya) against the four children's boxes of a BVH node at once, with
-/// pbrt-v4's 1 + 2 gamma(3) widening of the far distance so that rounding never culls a box the
-/// ray touches. Returns, per child slot, the distance at which the ray enters its box (0 when it
-/// starts inside), and a mask with bit c set where the ray enters child c's box no later than
-/// `t_max` and the slot is not empty. (The shader returns -1 for the misses and builds the mask
-/// from the distances; here SSE's movemask gives it in one instruction.)
+/// The slab test (Kay and Kajiya) against four boxes at once, given as rows of their bounds
+/// (`min[axis]` holds the four boxes' minima on that axis), with pbrt-v4's 1 + 2 gamma(3)
+/// widening of the far distance so that rounding never culls a box the ray touches. Returns, per
+/// box, the distance at which the ray enters it (0 when it starts inside), and a mask with bit
+/// c set where the ray enters box c no later than `t_max`. The CPU's wide nodes are rows of four
+/// such boxes (`wide_bvh::intersect_wide`); the shader's `intersect_aabb4` is the same test on
+/// a four-wide node (it returns -1 for the misses and builds the mask from the distances; here
+/// SSE's movemask gives it in one instruction).
 #[inline]
-pub fn intersect_aabb4(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f32; 4], u32) {
-    let slab = |lo: [f32; 4], hi: [f32; 4], o: f32, inv_d: f32| {
-        let t_lo = (Vec4::from(lo) - Vec4::splat(o)) * inv_d;
-        let t_hi = (Vec4::from(hi) - Vec4::splat(o)) * inv_d;
+pub fn intersect_boxes4(
+    min: [Vec4; 3],
+    max: [Vec4; 3],
+    o: Vec3,
+    inv_d: Vec3,
+    t_max: f32,
+) -> (Vec4, u32) {
+    let slab = |lo: Vec4, hi: Vec4, o: f32, inv_d: f32| {
+        let t_lo = (lo - Vec4::splat(o)) * inv_d;
+        let t_hi = (hi - Vec4::splat(o)) * inv_d;
         (t_lo.min(t_hi), t_lo.max(t_hi))
     };
-    let (near_x, far_x) = slab(node.min_x, node.max_x, o.x, inv_d.x);
-    let (near_y, far_y) = slab(node.min_y, node.max_y, o.y, inv_d.y);
-    let (near_z, far_z) = slab(node.min_z, node.max_z, o.z, inv_d.z);
+    let (near_x, far_x) = slab(min[0], max[0], o.x, inv_d.x);
+    let (near_y, far_y) = slab(min[1], max[1], o.y, inv_d.y);
+    let (near_z, far_z) = slab(min[2], max[2], o.z, inv_d.z);
     let t_near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
     let t_far = far_x.min(far_y).min(far_z) * (1.0 + 2.0 * gamma(3));
     let entered = t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask();
-    let mut occupied = 0;
-    for (c, &count) in node.count.iter().enumerate() {
-        occupied |= u32::from(count != EMPTY_SLOT) << c;
-    }
-    (t_near.to_array(), entered & occupied)
+    (t_near, entered)
 }
 
 /// 1/d per component, with zero components nudged to 1e-30 (keeping the sign) so that the slab

@@ -10,7 +10,7 @@
 //! in t.
 
 use crate::flat::{BvhNode, EMPTY_SLOT};
-use crate::geometry::gamma;
+use crate::geometry::intersect_boxes4;
 use arrayvec::ArrayVec;
 use glam::{Vec3, Vec4};
 
@@ -148,27 +148,23 @@ fn append(nodes: &[BvhNode], index: usize, open_children: bool, wide: &mut Vec<W
     at as u32
 }
 
-/// The slab test of a ray against a wide node's boxes, row by row as `geometry::intersect_aabb4`
-/// does it for four (the same operations per lane, with the same far-distance margin): per
-/// slot, the distance at which the ray enters the box (0 when it starts inside) and a mask of
-/// the occupied slots it enters no later than `t_max`. The rows do not depend on each other, so
-/// the core overlaps their tests.
+/// The slab test of a ray against a wide node's boxes, row by row
+/// ([`intersect_boxes4`]): per slot, the distance at which the ray enters the box (0 when it
+/// starts inside) and a mask of the occupied slots it enters no later than `t_max`. The rows do
+/// not depend on each other, so the core overlaps their tests.
 #[inline]
 pub fn intersect_wide(node: &WideNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f32; WIDTH], u32) {
-    let slab = |lo: Vec4, hi: Vec4, o: f32, inv_d: f32| {
-        let t_lo = (lo - Vec4::splat(o)) * inv_d;
-        let t_hi = (hi - Vec4::splat(o)) * inv_d;
-        (t_lo.min(t_hi), t_lo.max(t_hi))
-    };
     let mut t_enter = [0.0; WIDTH];
     let mut entered = 0;
     for h in 0..ROWS {
-        let (near_x, far_x) = slab(node.min_x[h], node.max_x[h], o.x, inv_d.x);
-        let (near_y, far_y) = slab(node.min_y[h], node.max_y[h], o.y, inv_d.y);
-        let (near_z, far_z) = slab(node.min_z[h], node.max_z[h], o.z, inv_d.z);
-        let t_near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
-        let t_far = far_x.min(far_y).min(far_z) * (1.0 + 2.0 * gamma(3));
-        entered |= t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask() << (4 * h);
+        let (t_near, mask) = intersect_boxes4(
+            [node.min_x[h], node.min_y[h], node.min_z[h]],
+            [node.max_x[h], node.max_y[h], node.max_z[h]],
+            o,
+            inv_d,
+            t_max,
+        );
+        entered |= mask << (4 * h);
         t_enter[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
     }
     let mut occupied = 0;
@@ -285,9 +281,11 @@ mod tests {
         assert!(!same_leaves(&nodes, &wide));
     }
 
-    /// The wide slab test gives, row by row, the four-wide test's entry distances and hits.
+    /// The wide slab test gives, slot by slot, what the slab test of that slot's box alone gives
+    /// (written out per box here, the same f32 operations): the same entry distance to the bit
+    /// and the same verdict, occupied slots only, in the slot's bit of the mask.
     #[test]
-    fn the_wide_slab_test_is_the_four_wide_one_per_row() {
+    fn the_wide_slab_test_is_the_slab_test_of_each_slot() {
         let (nodes, _) = crate::bvh::build(&soup(2000), &[]);
         let wide = collapse(&nodes);
         let node = &wide[0];
@@ -297,24 +295,20 @@ mod tests {
             let d = (Vec3::new(r(3), r(4), r(5)) - 0.5).normalize();
             let inv_d = crate::geometry::safe_inverse(d);
             let t_max = r(6) * 40.0;
-            let (t8, mask8) = intersect_wide(node, o, inv_d, t_max);
-            for h in 0..ROWS {
-                let mut four = BvhNode::default();
-                for l in 0..4 {
-                    four.min_x[l] = node.min_x[h][l];
-                    four.min_y[l] = node.min_y[h][l];
-                    four.min_z[l] = node.min_z[h][l];
-                    four.max_x[l] = node.max_x[h][l];
-                    four.max_y[l] = node.max_y[h][l];
-                    four.max_z[l] = node.max_z[h][l];
-                    four.count[l] = node.count[4 * h + l];
-                }
-                let (t4, mask4) = crate::geometry::intersect_aabb4(&four, o, inv_d, t_max);
-                assert_eq!(mask4, (mask8 >> (4 * h)) & 0xf);
-                for l in 0..4 {
-                    if mask4 >> l & 1 == 1 {
-                        assert_eq!(t4[l].to_bits(), t8[4 * h + l].to_bits());
-                    }
+            let (t_enter, mask) = intersect_wide(node, o, inv_d, t_max);
+            for (c, &t) in t_enter.iter().enumerate() {
+                let (h, l) = (c / 4, c % 4);
+                let lo = Vec3::new(node.min_x[h][l], node.min_y[h][l], node.min_z[h][l]);
+                let hi = Vec3::new(node.max_x[h][l], node.max_y[h][l], node.max_z[h][l]);
+                let (t_lo, t_hi) = ((lo - o) * inv_d, (hi - o) * inv_d);
+                let near = t_lo.min(t_hi);
+                let far = t_lo.max(t_hi);
+                let t_near = near.x.max(near.y).max(near.z).max(0.0);
+                let t_far = far.x.min(far.y).min(far.z) * (1.0 + 2.0 * crate::geometry::gamma(3));
+                let enters = node.count[c] != EMPTY_SLOT && t_near <= t_far.min(t_max);
+                assert_eq!(mask >> c & 1 == 1, enters, "ray {i}, slot {c}");
+                if enters {
+                    assert_eq!(t.to_bits(), t_near.to_bits(), "ray {i}, slot {c}");
                 }
             }
         }

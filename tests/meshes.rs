@@ -707,14 +707,7 @@ fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
     let tris = cut_bunny(6);
     assert!(tris.len() >= 100_000, "{} triangles", tris.len());
     let (nodes, prims) = bvh::build(&tris, &[]);
-    let scene = FlatScene {
-        packs: bvh::triangle_packs(&tris, &prims),
-        wide: hexray::wide_bvh::collapse(&nodes),
-        triangles: tris.clone(),
-        nodes,
-        prims,
-        ..Default::default()
-    };
+    let scene = FlatScene::from_tree(tris.clone(), Vec::new(), nodes, prims);
     // A fixed generator of uniform numbers in [0, 1).
     let rnd = |i: u32, k: u32| {
         let mut x = (i as u64) << 32 | k as u64;
