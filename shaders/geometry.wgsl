@@ -231,6 +231,7 @@ fn sphere_point_at(sphere: Sphere, local: vec3<f32>) -> PointWithError {
 // The slab test against the four children's boxes of a node at once, with pbrt-v4's
 // 1 + 2 gamma(3) widening of the far distance. Per child slot: the distance at which the ray
 // enters the box (0 inside), or -1 when it misses, enters beyond t_max or the slot is empty.
+// The CPU's is `geometry::intersect_boxes4`, which its wide nodes call once per row of four.
 fn intersect_aabb4(node: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) -> vec4<f32> {
     let lo_x = (node.min_x - o.x) * inv_d.x;
     let hi_x = (node.max_x - o.x) * inv_d.x;
