@@ -197,14 +197,21 @@ impl HashGrid {
     }
 
     /// The second step: the buckets' ranges (from the cache, if the first step was early
-    /// enough), and a prefetch of their entries.
+    /// enough), and a prefetch of their entries and of the same slots of `beside`, an array
+    /// kept in entry order (the CPU's photon records).
     #[inline]
-    pub fn prefetch_entries(&self, query: &PendingQuery) {
+    pub fn prefetch_entries<T>(&self, query: &PendingQuery, beside: &[T]) {
         for &b in &query.buckets[..query.n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
             if start < end {
                 prefetch(&self.entries[start as usize]);
                 prefetch(&self.entries[end as usize - 1]);
+                if let (Some(first), Some(last)) =
+                    (beside.get(start as usize), beside.get(end as usize - 1))
+                {
+                    prefetch(first);
+                    prefetch(last);
+                }
             }
         }
     }
@@ -212,11 +219,21 @@ impl HashGrid {
     /// The last step: `visit(i)` for every vertex within r, as [`HashGrid::query`] says.
     #[inline]
     pub fn finish_query(&self, query: &PendingQuery, mut visit: impl FnMut(u32)) {
+        self.finish_query_slots(query, |j| visit(entry_index(&self.entries[j])));
+    }
+
+    /// The last step, naming each vertex within r by its slot in `entries` (the same vertices
+    /// in the same order as [`HashGrid::finish_query`]), for arrays kept in entry order.
+    #[inline]
+    pub fn finish_query_slots(&self, query: &PendingQuery, mut visit: impl FnMut(usize)) {
         for &b in &query.buckets[..query.n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
-            for e in &self.entries[start as usize..end as usize] {
+            for (j, e) in self.entries[start as usize..end as usize]
+                .iter()
+                .enumerate()
+            {
                 if (Vec3::new(e[0], e[1], e[2]) - query.p).length_squared() < self.params.radius2 {
-                    visit(entry_index(e));
+                    visit(start as usize + j);
                 }
             }
         }

@@ -393,8 +393,17 @@ pub fn weight_merge(
     camera_to_light: f32,
     camera_rev: f32,
 ) -> f32 {
-    let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
+    let w_light = merge_light_share(light, merge, camera_to_light);
     1.0 / (w_light + 1.0 + merge_camera_share(camera, merge, camera_rev))
+}
+
+/// The light side's part of [`weight_merge`]'s denominator: the strategies that connect or
+/// merge on the light subpath, relative to merging here. It does not depend on the camera
+/// vertex (the photon is taken as arrived there), so the CPU computes it once per photon and
+/// iteration (`cpu::bdpt::PhotonRecord`).
+#[inline]
+pub fn merge_light_share(light: &SubpathMis, merge: &MergeMis, camera_to_light: f32) -> f32 {
+    light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light)
 }
 
 /// The camera side's part of [`weight_merge`]'s denominator: the strategies that connect or

@@ -10,7 +10,7 @@ pub use path::{trace_path, Faults};
 use crate::camera::Camera;
 use crate::film::{Film, PixelStats};
 use crate::flat::FlatScene;
-use crate::hash_grid::HashGrid;
+use crate::hash_grid::{entry_index, HashGrid};
 use crate::merging::{kernel_normalization, MergeRadius};
 use crate::method::Method;
 use crate::sampling::Sampler;
@@ -99,6 +99,8 @@ pub struct LightPassBuffers {
     pub vertices: Vec<LightVertex>,
     pub starts: Vec<u32>,
     pub grid: HashGrid,
+    /// The photons' records in the grid's entry order (merging; `bdpt::PhotonRecord`).
+    pub records: Vec<bdpt::PhotonRecord>,
     /// The grid's origin: the scene's bounding-box corner (`merging::scene_bounds`).
     pub grid_min: glam::Vec3,
     /// The merge radius's schedule (SPPM, VCM).
@@ -122,6 +124,7 @@ impl LightPassBuffers {
             vertices: Vec::new(),
             starts: Vec::new(),
             grid: HashGrid::default(),
+            records: Vec::new(),
             grid_min: crate::merging::scene_bounds(scene).0,
             radius,
             camera_subpaths: if bdpt {
@@ -212,13 +215,21 @@ pub fn render_iterations(
             rays += chunk_rays;
         }
 
-        // The hash grid of the iteration's light vertices (merging).
+        // The hash grid of the iteration's light vertices, and what a merge reads of each in
+        // the grid's entry order (merging).
         if radius > 0.0 {
             buffers.grid = HashGrid::build(
                 buffers.vertices.iter().map(|v| v.p.into()),
                 buffers.grid_min,
                 radius,
             );
+            let (vertices, connects) = (&buffers.vertices, method.connects());
+            buffers.records.clear();
+            buffers
+                .records
+                .par_extend(buffers.grid.entries.par_iter().map(|e| {
+                    bdpt::PhotonRecord::new(&vertices[entry_index(e) as usize], &merge, connects)
+                }));
         }
 
         // The camera pass: each pixel's camera subpaths, plus its splats.
@@ -232,7 +243,7 @@ pub fn render_iterations(
             connects: method.connects(),
             merge,
             photons: (radius > 0.0).then(|| bdpt::Photons {
-                vertices: &buffers.vertices,
+                records: &buffers.records,
                 grid: &buffers.grid,
                 normalization: kernel_normalization(radius, n_paths, faults.merge_kernel_ball),
             }),
