@@ -16,6 +16,7 @@
 //! every vertex in it against the exact distance, so collisions cost time, never correctness.
 
 use glam::{IVec3, Vec3};
+use rayon::prelude::*;
 
 /// Cell coordinates are clamped to ±2^30 before hashing, so a radius tiny against the scene
 /// cannot overflow an i32 (the same clamp on both backends).
@@ -134,20 +135,27 @@ impl Default for GridParams {
 }
 
 impl HashGrid {
-    /// Builds the grid of `positions` for merging within `radius`, by counting sort, with cells
-    /// counted from `min` (the scene's bounding-box corner, known to both backends before any
-    /// vertex is traced).
-    pub fn build(
-        positions: impl Iterator<Item = Vec3> + Clone,
+    /// Builds the grid of `items` (vertex i at `position(&items[i])`) for merging within
+    /// `radius`, by counting sort, with cells counted from `min` (the scene's bounding-box
+    /// corner, known to both backends before any vertex is traced). The buckets are hashed in
+    /// parallel, once; counting and the scatter, which touch the arrays at hashed places, run
+    /// in vertex order.
+    pub fn build<T: Sync>(
+        items: &[T],
+        position: impl Fn(&T) -> Vec3 + Sync,
         min: Vec3,
         radius: f32,
     ) -> HashGrid {
-        let count = positions.clone().count() as u32;
+        let count = items.len() as u32;
         let params = GridParams::new(min, count, radius);
+        let buckets: Vec<u32> = items
+            .par_iter()
+            .map(|x| params.bucket(position(x)))
+            .collect();
         // Count per bucket, then the exclusive prefix sum: starts[b] is where bucket b begins.
         let mut starts = vec![0u32; params.buckets() + 1];
-        for p in positions.clone() {
-            starts[params.bucket(p) as usize + 1] += 1;
+        for &b in &buckets {
+            starts[b as usize + 1] += 1;
         }
         for b in 1..starts.len() {
             starts[b] += starts[b - 1];
@@ -155,10 +163,10 @@ impl HashGrid {
         // Scatter in vertex order, so each bucket lists its vertices in increasing index.
         let mut cursor = starts.clone();
         let mut entries = vec![[0.0f32; 4]; count as usize];
-        for (i, p) in positions.enumerate() {
-            let b = params.bucket(p) as usize;
-            entries[cursor[b] as usize] = [p.x, p.y, p.z, f32::from_bits(i as u32)];
-            cursor[b] += 1;
+        for (i, (x, &b)) in items.iter().zip(&buckets).enumerate() {
+            let p = position(x);
+            entries[cursor[b as usize] as usize] = [p.x, p.y, p.z, f32::from_bits(i as u32)];
+            cursor[b as usize] += 1;
         }
         HashGrid {
             params,
@@ -279,7 +287,7 @@ mod tests {
                 Vec3::new((f * 0.37).sin(), (f * 0.11).cos(), (f * 0.07).sin()) * 3.0
             })
             .collect();
-        let grid = HashGrid::build(points.iter().copied(), Vec3::splat(-3.0), 0.05);
+        let grid = HashGrid::build(&points, |&p| p, Vec3::splat(-3.0), 0.05);
         assert_eq!(grid.entries.len(), 1000);
         for b in 0..grid.params.buckets() {
             let s: Vec<u32> = grid.entries[grid.starts[b] as usize..grid.starts[b + 1] as usize]

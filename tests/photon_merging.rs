@@ -49,7 +49,7 @@ fn the_hash_grid_finds_exactly_the_vertices_within_the_radius() {
     let queries = points(2000, 2);
     let mut total = 0;
     for r in [0.02f32, 0.1, 0.4] {
-        let grid = HashGrid::build(vertices.iter().copied(), Vec3::splat(-2.0), r);
+        let grid = HashGrid::build(&vertices, |&p| p, Vec3::splat(-2.0), r);
         for &q in &queries {
             let (found, brute) = neighbours(&grid, &vertices, q, r);
             assert_eq!(found, brute, "query {q} at r = {r}");
@@ -81,7 +81,7 @@ fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
     let mut total = 0;
     for r in [0.02f32, 0.1, 0.4] {
         let (grid, found) = renderer.grid_check(&vertices, &queries, r).unwrap();
-        let cpu = HashGrid::build(vertices.iter().copied(), min, r);
+        let cpu = HashGrid::build(&vertices, |&p| p, min, r);
         assert_eq!(grid.params, cpu.params, "r = {r}");
         assert_eq!(grid.starts, cpu.starts, "r = {r}");
         let bits = |e: &Vec<[f32; 4]>| -> Vec<[u32; 4]> {
@@ -113,7 +113,7 @@ fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
 fn the_grid_check_rejects_a_search_of_one_cell() {
     let vertices = points(20_000, 1);
     let r = 0.1;
-    let grid = HashGrid::build(vertices.iter().copied(), Vec3::splat(-2.0), r);
+    let grid = HashGrid::build(&vertices, |&p| p, Vec3::splat(-2.0), r);
     let missed = points(2000, 2).iter().any(|&q| {
         let own = grid.params.bucket(q) as usize;
         let mut found: Vec<u32> = grid.entries

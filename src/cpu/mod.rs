@@ -218,11 +218,8 @@ pub fn render_iterations(
         // The hash grid of the iteration's light vertices, and what a merge reads of each in
         // the grid's entry order (merging).
         if radius > 0.0 {
-            buffers.grid = HashGrid::build(
-                buffers.vertices.iter().map(|v| v.p.into()),
-                buffers.grid_min,
-                radius,
-            );
+            buffers.grid =
+                HashGrid::build(&buffers.vertices, |v| v.p.into(), buffers.grid_min, radius);
             let (vertices, connects) = (&buffers.vertices, method.connects());
             buffers.records.clear();
             buffers
