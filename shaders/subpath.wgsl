@@ -162,8 +162,14 @@ fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f
 // Merging a photon (light vertex) at a camera vertex, against the connection at the light
 // vertex and every strategy earlier on either subpath.
 fn weight_merge(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32) -> f32 {
-    let w_light = light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
+    let w_light = merge_light_share(light, merge, camera_to_light);
     return 1.0 / (w_light + 1.0 + merge_camera_share(camera, merge, camera_rev));
+}
+
+// The light side's part of weight_merge's denominator, which does not depend on the camera
+// vertex (the CPU computes it once per photon: cpu/bdpt.rs, PhotonRecord).
+fn merge_light_share(light: SubpathMis, merge: MergeMis, camera_to_light: f32) -> f32 {
+    return light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
 }
 
 // The camera side's part of weight_merge's denominator, which does not depend on the photon.
