@@ -7,7 +7,10 @@
 # by; the seconds give each method's cost, so relative variance x seconds is its inverse
 # efficiency.
 #
-#   benches/mirror_share.sh            (SPP iterations or samples, default 64; 256x256, CPU)
+#   [SPP=64] [HEXRAY=target/release/hexray] benches/mirror_share.sh   (256x256, CPU)
+#
+# SPP: iterations (vcm) or samples (path) per render. HEXRAY is used as built: build it first
+# (`cargo build --release`); the header names the checkout it was run from (`git describe`).
 #
 # The variance of a pixel mean is estimated from its own samples, which understates heavy tails
 # (path tracing's rare bright paths): read the path rows as a lower bound.
@@ -29,7 +32,7 @@ for t in scene["triangles"]:
 json.dump(scene, open(sys.argv[1], "w"))
 PY
 
-echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; hexray $(git rev-parse --short HEAD), $spp spp, 256x256"
+echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; hexray $(git describe --always --dirty), $spp spp, 256x256"
 echo "scene,method,seconds,relative_variance"
 for scene in scenes/tncg15_room.json "$work/no_mirror_wall.json"; do
     name=$(basename "$scene" .json)
@@ -40,6 +43,10 @@ for scene in scenes/tncg15_room.json "$work/no_mirror_wall.json"; do
             sed -n 's/^rendered .* in \([0-9.]*\) s.*/\1/p')
         noise=$("$hexray" compare "$out" "$out" --json |
             python3 -c 'import json, sys; print(json.load(sys.stdin)["relmse_reference_noise"])')
+        if [ -z "$seconds" ] || [ "$noise" = None ]; then
+            echo "mirror_share: no time or no variance from the $method render of $name" >&2
+            exit 1
+        fi
         echo "$name,$method,$seconds,$noise"
     done
 done

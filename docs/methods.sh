@@ -234,9 +234,11 @@ if os.path.exists(f"{out}/readme_default.json"):
         secs[which] = float(line.split(" in ")[1].split(" s")[0])
         print(f"| {line} | {c['relmse']:.2e} | {c['relmse'] - n:.2e} |")
     ratio = vals['default'] / vals['path']
+    longer = "longer" if secs['default'] > secs['path'] else "shorter"
     print(f"\nRatio default / old default: {ratio:.3f}. A time budget ends after the iteration that")
-    print("crosses it, so the default ran for longer; at equal time (relMSE x seconds, the inverse of")
-    print(f"the efficiency, since a method's variance falls as 1/time): {ratio * secs['default'] / secs['path']:.3f}.\n")
+    print(f"crosses it, so the default ran {longer} ({secs['default']:.2f} s against {secs['path']:.2f} s); at equal time")
+    print("(relMSE x seconds, the inverse of the efficiency, since a method's variance falls as")
+    print(f"1/time): {ratio * secs['default'] / secs['path']:.3f}.\n")
     print(f"![the default render]({'tncg15_room.png'}) ![path, 64 spp]({os.path.basename(out)}/tncg15_room_512_path_64spp.png)\n")
 if os.path.exists(f"{out}/bench.txt"):
     print("## Cost\n")

@@ -8,7 +8,9 @@
 //! exclusive prefix sum, a scatter in vertex order. So the layout is a function of the vertices
 //! alone: bucket b holds `entries[starts[b]..starts[b + 1]]`, in increasing vertex index, each
 //! entry the vertex's position and index in one vec4 (the index's bits in w), so that a query
-//! reads its buckets' positions contiguously and loads only the vertices within r.
+//! reads its buckets' positions contiguously and loads only the vertices within r (the GPU by
+//! index; the CPU reads a copy of what a merge needs, kept in entry order and named by the
+//! entry's slot: `cpu::bdpt::PhotonRecord`, [`HashGrid::finish_query_slots`]).
 //! `shaders/hash_grid.wgsl` builds the same arrays with atomics and a scan dispatch and then
 //! sorts each bucket, so both backends hold the same grid bit for bit.
 //!
@@ -139,7 +141,8 @@ impl HashGrid {
     /// `radius`, by counting sort, with cells counted from `min` (the scene's bounding-box
     /// corner, known to both backends before any vertex is traced). The buckets are hashed in
     /// parallel, once; counting and the scatter, which touch the arrays at hashed places, run
-    /// in vertex order.
+    /// in vertex order. `position` is called twice per vertex (to hash, then to scatter) and
+    /// must give the same point both times.
     pub fn build<T: Sync>(
         items: &[T],
         position: impl Fn(&T) -> Vec3 + Sync,

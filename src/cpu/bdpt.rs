@@ -11,7 +11,9 @@
 //! The same pass, with photons, is the camera pass of the merging methods. VCM (Georgiev et al.
 //! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the
 //! iteration (of any pixel's light subpath) within the radius r, found in the hash grid
-//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`). With
+//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`; the CPU
+//! adds its two sides, `merge_light_share` kept per photon in a `PhotonRecord` and
+//! `merge_camera_share` once per query, with the same arithmetic in the same order). With
 //! the radius 0 it is BDPT, bit for bit. SPPM is the special case without connections
 //! (Georgiev's PPM, as Knaus and Zwicker's probabilistic PPM): the camera subpath follows
 //! mirrors and glass to its first diffuse vertex, merges there with weight 1 and stops; it
@@ -92,6 +94,8 @@ pub struct PhotonRecord {
     /// 0 without connections (SPPM, whose weights are 1).
     pub w_light: f32,
 }
+
+const _: () = assert!(std::mem::size_of::<PhotonRecord>() == 32);
 
 impl PhotonRecord {
     /// The record of vertex `v` in an iteration with merging constants `merge`; `connects`
@@ -442,9 +446,17 @@ mod tests {
                 d_vm: v.d_vm,
             };
             let expected = weight_merge(&camera, &light, &merge, n.dot(wo) * FRAC_1_PI, pdf_rev);
+            // Eqs. 37-39 written out, apart from the functions both sides share.
+            let c = n.dot(wo) * FRAC_1_PI;
+            let written_out = 1.0
+                / (v.d_vcm * merge.vc
+                    + v.d_vm * (c * c)
+                    + 1.0
+                    + (camera.d_vcm * merge.vc + camera.d_vm * (pdf_rev * pdf_rev)));
             let record = PhotonRecord::new(&v, &merge, true);
             let got = 1.0 / (record.w_light + 1.0 + merge_camera_share(&camera, &merge, pdf_rev));
             assert_eq!(got.to_bits(), expected.to_bits(), "photon {i}");
+            assert_eq!(got.to_bits(), written_out.to_bits(), "photon {i}");
             assert_eq!(
                 (record.n, record.length, record.throughput),
                 (v.n, v.length, v.throughput)

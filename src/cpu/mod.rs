@@ -239,10 +239,13 @@ pub fn render_iterations(
             shadow_threshold: buffers.shadow_threshold,
             connects: method.connects(),
             merge,
-            photons: (radius > 0.0).then(|| bdpt::Photons {
-                records: &buffers.records,
-                grid: &buffers.grid,
-                normalization: kernel_normalization(radius, n_paths, faults.merge_kernel_ball),
+            photons: (radius > 0.0).then(|| {
+                debug_assert_eq!(buffers.records.len(), buffers.grid.entries.len());
+                bdpt::Photons {
+                    records: &buffers.records,
+                    grid: &buffers.grid,
+                    normalization: kernel_normalization(radius, n_paths, faults.merge_kernel_ball),
+                }
             }),
         };
         let tiles_x = w.div_ceil(TILE);
