@@ -36,7 +36,7 @@ echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(grep -m1 'model name' /proc/cpuinfo | cut
 echo "scene,method,seconds,relative_variance"
 for scene in scenes/tncg15_room.json "$work/no_mirror_wall.json"; do
     name=$(basename "$scene" .json)
-    for method in vcm path; do
+    for method in vcm bdpt path; do
         out="$work/${name}_$method.exr"
         seconds=$("$hexray" render "$scene" --backend cpu --method "$method" --spp "$spp" \
             --width 256 --height 256 --seed 1 --variance --out "$out" 2>&1 |
