@@ -163,6 +163,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             }
             if merges() && (q_merge >= 1.0 || draw4(sampler, dim_merge(bounce)).x < q_merge) {
                 var gathered = vec3<f32>(0.0);
+                let camera_share = merge_camera_share(m, iteration_merge(), pdf_rev);
                 let q = query_buckets(hit.p);
                 for (var j = 0u; j < q.n; j++) {
                     let b = q.b[j];
@@ -177,11 +178,12 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                         if depth + v.length > max_edges || dot(v.n, n_facing) <= 0.0 {
                             continue;
                         }
+                        // subpath.rs: weight_merge, its two sides added as the CPU adds them.
                         var w = 1.0;
                         if connects() {
                             let light_mis = SubpathMis(v.d_vcm, v.d_vc, v.d_vm);
                             let cos_light = dot(v.n, v.wo);
-                            w = weight_merge(m, light_mis, iteration_merge(), cos_light * FRAC_1_PI, pdf_rev);
+                            w = 1.0 / (merge_light_share(light_mis, iteration_merge(), cos_light * FRAC_1_PI) + 1.0 + camera_share);
                         }
                         gathered += v.throughput * w;
                     }

@@ -159,12 +159,10 @@ fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f
     return 1.0 / (1.0 + mis(pdf_camera / (n_light_paths * pdf_area)));
 }
 
-// Merging a photon (light vertex) at a camera vertex, against the connection at the light
-// vertex and every strategy earlier on either subpath.
-fn weight_merge(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32) -> f32 {
-    let w_light = merge_light_share(light, merge, camera_to_light);
-    return 1.0 / (w_light + 1.0 + merge_camera_share(camera, merge, camera_rev));
-}
+// Merging a photon (light vertex) at a camera vertex is weighed against the connection at the
+// light vertex and every strategy earlier on either subpath (subpath.rs: weight_merge):
+// 1 / (light side + 1 + camera side). The camera pass adds the two sides below itself, the
+// camera side once per query.
 
 // The light side's part of weight_merge's denominator, which does not depend on the camera
 // vertex (the CPU computes it once per photon: cpu/bdpt.rs, PhotonRecord).

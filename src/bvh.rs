@@ -407,8 +407,8 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
 /// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared
 /// four-wide tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the
 /// four-wide tree it is made of, docs/performance.md). At each node the children's boxes are
-/// tested at once. The leaves among the hit children are tested first, so that their hits lower t_limit before
-/// anything is pushed; then the nearest hit interior child is visited next and the others are
+/// tested at once. The leaves among the hit children are tested first, so that their hits
+/// lower t_limit before anything is pushed; then the nearest hit interior child is visited next and the others are
 /// pushed with their entry distances: a missed child is never pushed and a pushed one that a
 /// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
 /// distance: sorting all four was measured slower (the keys' lanes travel through memory) for

@@ -34,6 +34,17 @@ pub struct WideNode {
     pub count: [u32; WIDTH],
 }
 
+impl WideNode {
+    /// Slot `c`'s box (min, max).
+    pub fn child_bounds(&self, c: usize) -> (Vec3, Vec3) {
+        let (h, l) = (c / 4, c % 4);
+        (
+            Vec3::new(self.min_x[h][l], self.min_y[h][l], self.min_z[h][l]),
+            Vec3::new(self.max_x[h][l], self.max_y[h][l], self.max_z[h][l]),
+        )
+    }
+}
+
 impl Default for WideNode {
     /// A node of empty slots: inverted boxes, which no ray enters.
     fn default() -> Self {
@@ -196,9 +207,7 @@ mod tests {
     fn leaves8(wide: &[WideNode], index: usize, out: &mut Vec<(u32, u32, Vec3, Vec3)>) {
         let node = &wide[index];
         for c in (0..WIDTH).filter(|&c| node.count[c] != EMPTY_SLOT) {
-            let (h, l) = (c / 4, c % 4);
-            let lo = Vec3::new(node.min_x[h][l], node.min_y[h][l], node.min_z[h][l]);
-            let hi = Vec3::new(node.max_x[h][l], node.max_y[h][l], node.max_z[h][l]);
+            let (lo, hi) = node.child_bounds(c);
             if node.count[c] == 0 {
                 let from = out.len();
                 leaves8(wide, node.child[c] as usize, out);
@@ -297,9 +306,7 @@ mod tests {
             let t_max = r(6) * 40.0;
             let (t_enter, mask) = intersect_wide(node, o, inv_d, t_max);
             for (c, &t) in t_enter.iter().enumerate() {
-                let (h, l) = (c / 4, c % 4);
-                let lo = Vec3::new(node.min_x[h][l], node.min_y[h][l], node.min_z[h][l]);
-                let hi = Vec3::new(node.max_x[h][l], node.max_y[h][l], node.max_z[h][l]);
+                let (lo, hi) = node.child_bounds(c);
                 let (t_lo, t_hi) = ((lo - o) * inv_d, (hi - o) * inv_d);
                 let near = t_lo.min(t_hi);
                 let far = t_lo.max(t_hi);

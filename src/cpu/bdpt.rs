@@ -11,9 +11,9 @@
 //! The same pass, with photons, is the camera pass of the merging methods. VCM (Georgiev et al.
 //! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the
 //! iteration (of any pixel's light subpath) within the radius r, found in the hash grid
-//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`; the CPU
-//! adds its two sides, `merge_light_share` kept per photon in a `PhotonRecord` and
-//! `merge_camera_share` once per query, with the same arithmetic in the same order). With
+//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its two
+//! sides added here: `merge_camera_share` once per query, `merge_light_share` per photon, which
+//! the CPU keeps in a `PhotonRecord`; the same arithmetic in the same order). With
 //! the radius 0 it is BDPT, bit for bit. SPPM is the special case without connections
 //! (Georgiev's PPM, as Knaus and Zwicker's probabilistic PPM): the camera subpath follows
 //! mirrors and glass to its first diffuse vertex, merges there with weight 1 and stops; it
@@ -341,7 +341,7 @@ impl CameraPass<'_> {
                         if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
                             return;
                         }
-                        // subpath::weight_merge, its light side precomputed per photon.
+                        // subpath::weight_merge, its two sides added as the shader adds them.
                         let w = if self.connects {
                             1.0 / (v.w_light + 1.0 + camera_share)
                         } else {
