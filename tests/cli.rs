@@ -124,6 +124,13 @@ fn a_time_budget_ends_the_render_and_keeps_its_samples() {
     assert!((0.5..5.0).contains(&secs), "rendered for {secs} s");
 }
 
+/// Ctrl-C once the render has samples: it ends after the current pass, writes every sample
+/// taken, and exits 130. The test waits for the render's first checkpoint (written after two
+/// seconds of rendering) rather than a fixed time: start-up differs by machine. On an NVIDIA
+/// H100 (2026-11-26), which `--backend auto` takes, a signal at a fixed 1.5 s found the render
+/// still starting (driver, kernel builds) with no sample taken, so, rightly, nothing was
+/// written. It then removes the checkpoint's files and signals at once, seconds before the next
+/// checkpoint is due, so the image read afterwards is the one written on the signal.
 #[cfg(unix)]
 #[test]
 fn ctrl_c_ends_the_render_and_keeps_its_samples() {
@@ -135,6 +142,8 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
             "scenes/tncg15_room.json",
             "--time",
             "600",
+            "--checkpoint",
+            "2",
             "--width",
             "64",
         ])
@@ -142,7 +151,23 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
         .arg(&exr)
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let film = dir.join("c.film");
+    let waited = std::time::Instant::now();
+    while !film.exists() {
+        assert!(
+            waited.elapsed().as_secs() < 120,
+            "no checkpoint within 120 s"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the render ended early"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // The film is renamed into place last, after the EXR and PNG.
+    for f in ["c.exr", "c.png", "c.film"] {
+        std::fs::remove_file(dir.join(f)).unwrap();
+    }
     let kill = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()

@@ -267,34 +267,61 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
     gpu_matches_cpu("scenes/glass_room.json", Method::Vcm);
 }
 
-/// The same seed on both backends draws the same random numbers, builds the same grid (the
-/// same photons in the same order in every bucket) and takes the same merges: the images agree
-/// to f32 rounding (measured relMSE 2.8e-16 for sppm and 9.3e-9 for vcm on tncg15_room, where
-/// rounding flips a few Russian-roulette decisions; the threshold, 1e-6, is far below any
-/// sampling difference, which at 64x64 and 16 iterations is about 1e-2).
-/// Planted: a GPU whose merge kernel is the 3-D ball's is rejected.
-fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<f64> {
+/// How many of a 64x64 image's pixels two renders on the same streams may differ in beyond f32
+/// rounding: 1 %. The same seed on both backends draws the same random numbers, builds the same
+/// grid (the same photons in the same order in every bucket) and takes the same merges, so every
+/// pixel agrees to f32 rounding (its relMSE term, [`pixels_differing`], below 1e-8; rounding
+/// alone leaves about 1e-14) except where rounding flips a discrete decision: a Russian-roulette
+/// draw or a photon on the merge radius, which moves a pixel by a whole path's worth. How often
+/// that happens depends on the GPU's arithmetic. lavapipe rounds like the CPU and NVIDIA's
+/// driver does not (fused multiply-adds, its own `sqrt`, `sin` and `cos`). Measured on
+/// tncg15_room, pixels beyond 1e-8 (relMSE):
+///
+/// | | sppm | vcm | sppm in waves | vcm in waves |
+/// | --- | --- | --- | --- | --- |
+/// | lavapipe (llvmpipe, LLVM 15) | 0 (2.8e-16) | 1 (9.8e-9) | 0 (2.1e-16) | 0 (8.5e-14) |
+/// | NVIDIA H100, driver 580.159.04 (2026-11-26) | 4 (3.4e-4) | 5 (1.2e-6) | 1 (1.3e-4) | 1 (2.6e-9) |
+/// | vcm with the 3-D ball's merge kernel planted on the GPU | | 772 (3.4) | | |
+///
+/// A relMSE bound cannot tell the H100's four flipped pixels from a planted error (one flipped
+/// sppm photon path weighs 3.4e-4 over 4096 pixels); a count of differing pixels can, by a factor
+/// of 150 on that plant. On both GPUs a second render of the same streams equals the first bit
+/// for bit (`gpu_merging_renders_the_same_streams_bit_for_bit`), so the flips are the
+/// arithmetic's, not a race's.
+const FLIPPED_PIXELS_ALLOWED: usize = 64 * 64 / 100;
+
+/// A pixel agrees to f32 rounding when its relMSE term is below this.
+const ROUNDING_TERM: f64 = 1e-8;
+
+/// The number of pixels in which the GPU's render differs from the CPU's on the same streams
+/// beyond f32 rounding: sppm or vcm, 64x64, 16 iterations, seed 7, with `gpu_faults` planted on
+/// the GPU.
+fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<usize> {
     let gpu = gpu()?;
     let (_, flat) = load(rel);
     let radius = MergeRadius::default_for(&flat);
     let a = render_cpu_merging(rel, 64, 64, 16, 7, method, radius, Faults::NONE);
     let b = render_gpu_merging(gpu, rel, 64, 64, 16, 7, method, radius, gpu_faults);
-    let e = relmse_between(&b, &a);
-    eprintln!("{method} {rel}, same seed, GPU against CPU: relMSE {e:.3e}");
-    Some(e)
+    let (n, worst) = pixels_differing(&b, &a, ROUNDING_TERM);
+    eprintln!(
+        "{method} {rel}, same seed, GPU against CPU: {n} of 4096 pixels beyond f32 rounding \
+         (largest term {worst:.3e}); relMSE {:.3e}",
+        relmse_between(&b, &a)
+    );
+    Some(n)
 }
 
 #[test]
 fn gpu_sppm_equals_cpu_on_the_same_streams() {
-    if let Some(e) = same_streams("scenes/tncg15_room.json", Method::Sppm, Faults::NONE) {
-        assert!(e < 1e-6, "relMSE {e:e}");
+    if let Some(n) = same_streams("scenes/tncg15_room.json", Method::Sppm, Faults::NONE) {
+        assert!(n <= FLIPPED_PIXELS_ALLOWED, "{n} pixels differ");
     }
 }
 
 #[test]
 fn gpu_vcm_equals_cpu_on_the_same_streams() {
-    if let Some(e) = same_streams("scenes/tncg15_room.json", Method::Vcm, Faults::NONE) {
-        assert!(e < 1e-6, "relMSE {e:e}");
+    if let Some(n) = same_streams("scenes/tncg15_room.json", Method::Vcm, Faults::NONE) {
+        assert!(n <= FLIPPED_PIXELS_ALLOWED, "{n} pixels differ");
     }
 }
 
@@ -304,8 +331,49 @@ fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
         merge_kernel_ball: true,
         ..Faults::NONE
     };
-    if let Some(e) = same_streams("scenes/tncg15_room.json", Method::Vcm, ball) {
-        assert!(e > 1e-4, "relMSE {e:e}");
+    if let Some(n) = same_streams("scenes/tncg15_room.json", Method::Vcm, ball) {
+        assert!(n > FLIPPED_PIXELS_ALLOWED, "only {n} pixels differ");
+    }
+}
+
+/// The GPU's merging renders are deterministic: photons are stored in the order the atomics
+/// hand out slots, but each bucket is sorted into light-path order before any merge reads it,
+/// and the film's sums are fixed-point integers, whose atomic adds give the same total in any
+/// order. So two renders of the same streams are equal bit for bit (so measured on lavapipe and
+/// on an NVIDIA H100). Planted: a second render one seed over differs.
+fn gpu_renders_twice_bit_for_bit(method: Method, second_seed: u32) -> Option<bool> {
+    let gpu = gpu()?;
+    let rel = "scenes/tncg15_room.json";
+    let (_, flat) = load(rel);
+    let radius = MergeRadius::default_for(&flat);
+    let a = render_gpu_merging(gpu, rel, 64, 64, 8, 7, method, radius, Faults::NONE);
+    let b = render_gpu_merging(
+        gpu,
+        rel,
+        64,
+        64,
+        8,
+        second_seed,
+        method,
+        radius,
+        Faults::NONE,
+    );
+    Some(a.pixels == b.pixels)
+}
+
+#[test]
+fn gpu_merging_renders_the_same_streams_bit_for_bit() {
+    for method in [Method::Sppm, Method::Vcm] {
+        if let Some(same) = gpu_renders_twice_bit_for_bit(method, 7) {
+            assert!(same, "{method}: two GPU renders of seed 7 differ");
+        }
+    }
+}
+
+#[test]
+fn the_bit_for_bit_check_rejects_another_seed() {
+    if let Some(same) = gpu_renders_twice_bit_for_bit(Method::Vcm, 8) {
+        assert!(!same, "seeds 7 and 8 rendered the same film");
     }
 }
 
@@ -314,11 +382,12 @@ fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
 /// connections are taken in the pixel's own wave. Summed over the waves that is every strategy
 /// once, so a pool of 3000 vertices (64x64 pixels store about 18 000 on tncg15_room: six or
 /// more waves) renders what the CPU renders on the same streams, to f32 rounding (the merges
-/// are summed in another order), within the same 1e-6 as one wave (measured: 2e-16 for sppm,
-/// 2e-13 for vcm). Planted by hand in the shader on 2026-11-24, both rejected: merging only in
-/// the pixel's own wave (relMSE 2.9e-1 for sppm, 4.5e-3 for vcm), and taking the connections
-/// in every wave (3.0).
-fn same_streams_in_waves(method: Method) -> Option<f64> {
+/// are summed in another order) but for the few flipped decisions allowed above (measured in
+/// the table there). Planted by hand in the shader on 2026-11-24 against the relMSE bound of
+/// that day, both rejected: merging only in the pixel's own wave (relMSE 2.9e-1 for sppm,
+/// 4.5e-3 for vcm), and taking the connections in every wave (3.0). The first planted again on
+/// 2026-11-26 against the pixel count, on lavapipe: 1911 (sppm) and 532 (vcm) pixels differ.
+fn same_streams_in_waves(method: Method) -> Option<usize> {
     let gpu = gpu()?;
     let rel = "scenes/tncg15_room.json";
     let (scene, flat) = load(rel);
@@ -329,25 +398,27 @@ fn same_streams_in_waves(method: Method) -> Option<f64> {
     r.set_max_light_vertices(3000);
     let mut b = Film::new(64, 64);
     r.render(0, 8, &mut b).unwrap();
-    let e = relmse_between(&b, &a);
+    let (n, worst) = pixels_differing(&b, &a, ROUNDING_TERM);
     eprintln!(
-        "{method}, pool of 3000 vertices, GPU against CPU: relMSE {e:.3e} ({:?})",
+        "{method}, pool of 3000 vertices, GPU against CPU: {n} of 4096 pixels beyond f32 \
+         rounding (largest term {worst:.3e}); relMSE {:.3e} ({:?})",
+        relmse_between(&b, &a),
         r.provenance()
     );
-    Some(e)
+    Some(n)
 }
 
 #[test]
 fn gpu_vcm_in_waves_equals_cpu_on_the_same_streams() {
-    if let Some(e) = same_streams_in_waves(Method::Vcm) {
-        assert!(e < 1e-6, "relMSE {e:e}");
+    if let Some(n) = same_streams_in_waves(Method::Vcm) {
+        assert!(n <= FLIPPED_PIXELS_ALLOWED, "{n} pixels differ");
     }
 }
 
 #[test]
 fn gpu_sppm_in_waves_equals_cpu_on_the_same_streams() {
-    if let Some(e) = same_streams_in_waves(Method::Sppm) {
-        assert!(e < 1e-6, "relMSE {e:e}");
+    if let Some(n) = same_streams_in_waves(Method::Sppm) {
+        assert!(n <= FLIPPED_PIXELS_ALLOWED, "{n} pixels differ");
     }
 }
 
