@@ -273,8 +273,9 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// pixel agrees to f32 rounding (its relMSE term, [`pixels_differing`], below 1e-8; rounding
 /// alone leaves about 1e-14) except where rounding flips a discrete decision: a Russian-roulette
 /// draw or a photon on the merge radius, which moves a pixel by a whole path's worth. How often
-/// that happens depends on the GPU's arithmetic. lavapipe rounds like the CPU and NVIDIA's
-/// driver does not (fused multiply-adds, its own `sqrt`, `sin` and `cos`). Measured on
+/// that happens depends on the GPU's arithmetic: lavapipe rounds almost as the CPU does, and
+/// NVIDIA's driver less so (WGSL lets it fuse multiply-adds and gives its `sqrt`, `sin` and
+/// `cos` an error bound, not a rounding; which of these flips what was not traced). Measured on
 /// tncg15_room, pixels beyond 1e-8 (relMSE):
 ///
 /// | | sppm | vcm | sppm in waves | vcm in waves |
