@@ -1,9 +1,9 @@
 // The hash grid over an iteration's light vertices for photon merging: `src/hash_grid.rs` again,
 // with the same names. Cells of side 2r hashed into a power of two of buckets (at least as many
 // as vertices); the vertices sorted by bucket with a counting sort in dispatches: grid_setup
-// (the bucket count from the vertex count), grid_count (an atomic count per bucket), grid_scan
-// (the exclusive prefix sum, one workgroup), grid_scatter (each vertex to its bucket's next
-// slot, by an atomic cursor), grid_sort (each bucket in the order of its vertices' light
+// (the bucket count from the vertex count), grid_count (an atomic count per bucket),
+// grid_scan_blocks, grid_scan_sums and grid_scan_add (the prefix sum), grid_scatter (each vertex
+// to its bucket's next slot, by an atomic cursor), grid_sort (each bucket in the order of its vertices' light
 // subpath and length, which is the CPU's vertex order). So the buckets list the same vertices in
 // the same order on both backends, and merges sum in the same order.
 
@@ -96,24 +96,22 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     atomicAdd(&grid_starts[grid_bucket(light_vertices[i].p) + 1u], 1u);
 }
 
+// The inclusive prefix sum over grid_starts[1 ..= buckets] in three dispatches, so that it
+// spreads over the whole GPU (one workgroup alone took 59 % of an sppm iteration on an H100 at
+// 512x512, docs/gpu.md): grid_scan_blocks scans blocks of SCAN_BLOCK counts in place, one
+// workgroup each, and leaves each block's total in grid_cursor (free until the scatter);
+// grid_scan_sums scans those totals in one workgroup; grid_scan_add adds to each block the
+// totals of the blocks before it. Integer sums, so the starts are the CPU's exactly.
 const SCAN_THREADS: u32 = 256u;
+const SCAN_PER_THREAD: u32 = 4u;
+const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_PER_THREAD;
 var<workgroup> scan_partial: array<u32, 256>;
 
-// One workgroup: the inclusive prefix sum over grid_starts[1 ..= buckets], each invocation a
-// contiguous chunk (its total, a scan of the totals in the workgroup, then the chunk again).
-@compute @workgroup_size(256, 1, 1)
-fn grid_scan(@builtin(local_invocation_index) lid: u32) {
-    let buckets = grid_params.mask + 1u;
-    let chunk = (buckets + SCAN_THREADS - 1u) / SCAN_THREADS;
-    let first = 1u + lid * chunk;
-    let end = min(first + chunk, buckets + 1u);
-    var total = 0u;
-    for (var i = first; i < end; i++) {
-        total += atomicLoad(&grid_starts[i]);
-    }
+// The inclusive scan of the workgroup's per-invocation totals in scan_partial (Hillis-Steele);
+// returns the sum of the totals before this invocation's.
+fn scan_workgroup(lid: u32, total: u32) -> u32 {
     scan_partial[lid] = total;
     workgroupBarrier();
-    // Hillis-Steele scan of the chunk totals.
     for (var stride = 1u; stride < SCAN_THREADS; stride <<= 1u) {
         var add = 0u;
         if lid >= stride {
@@ -123,10 +121,74 @@ fn grid_scan(@builtin(local_invocation_index) lid: u32) {
         scan_partial[lid] += add;
         workgroupBarrier();
     }
-    var running = scan_partial[lid] - total;
+    return scan_partial[lid] - total;
+}
+
+// One workgroup per block of SCAN_BLOCK buckets, block frame.path_origin + the workgroup
+// (dispatched for the largest bucket count; the blocks past this iteration's count scan zeros
+// and store nothing): each invocation scans its SCAN_PER_THREAD counts after the totals of the
+// invocations before it.
+@compute @workgroup_size(256, 1, 1)
+fn grid_scan_blocks(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
+    let buckets = grid_params.mask + 1u;
+    let block = frame.path_origin + wid.x;
+    let first = 1u + block * SCAN_BLOCK + lid * SCAN_PER_THREAD;
+    var v: array<u32, 4>;
+    var total = 0u;
+    for (var k = 0u; k < SCAN_PER_THREAD; k++) {
+        v[k] = 0u;
+        if first + k <= buckets {
+            v[k] = atomicLoad(&grid_starts[first + k]);
+        }
+        total += v[k];
+    }
+    var running = scan_workgroup(lid, total);
+    for (var k = 0u; k < SCAN_PER_THREAD; k++) {
+        running += v[k];
+        if first + k <= buckets {
+            atomicStore(&grid_starts[first + k], running);
+        }
+    }
+    if lid == SCAN_THREADS - 1u && 1u + block * SCAN_BLOCK <= buckets {
+        atomicStore(&grid_cursor[block], running);
+    }
+}
+
+// One workgroup: the inclusive prefix sum of the block totals grid_cursor[0 .. blocks), each
+// invocation a contiguous chunk (its total, a scan of the totals in the workgroup, then the
+// chunk again).
+@compute @workgroup_size(256, 1, 1)
+fn grid_scan_sums(@builtin(local_invocation_index) lid: u32) {
+    let blocks = (grid_params.mask + SCAN_BLOCK) / SCAN_BLOCK;
+    let chunk = (blocks + SCAN_THREADS - 1u) / SCAN_THREADS;
+    let first = lid * chunk;
+    let end = min(first + chunk, blocks);
+    var total = 0u;
     for (var i = first; i < end; i++) {
-        running += atomicLoad(&grid_starts[i]);
-        atomicStore(&grid_starts[i], running);
+        total += atomicLoad(&grid_cursor[i]);
+    }
+    var running = scan_workgroup(lid, total);
+    for (var i = first; i < end; i++) {
+        running += atomicLoad(&grid_cursor[i]);
+        atomicStore(&grid_cursor[i], running);
+    }
+}
+
+// One workgroup per block after the first, block frame.path_origin + the workgroup: the totals
+// of the blocks before it, added to each of its buckets.
+@compute @workgroup_size(256, 1, 1)
+fn grid_scan_add(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>) {
+    let buckets = grid_params.mask + 1u;
+    let block = frame.path_origin + wid.x;
+    let first = 1u + block * SCAN_BLOCK + lid * SCAN_PER_THREAD;
+    if first > buckets {
+        return;
+    }
+    let before = atomicLoad(&grid_cursor[block - 1u]);
+    for (var k = 0u; k < SCAN_PER_THREAD; k++) {
+        if first + k <= buckets {
+            atomicAdd(&grid_starts[first + k], before);
+        }
     }
 }
 

@@ -206,6 +206,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
         PRIM_SPHERE_BIT,
     };
+    use hexray::gpu::bidirectional::SCAN_BLOCK;
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
     use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -225,6 +226,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         DIM_EMISSION,
         DIM_EMISSION_DIR,
         FRACTION_BITS,
+        SCAN_BLOCK,
     )
 }
 

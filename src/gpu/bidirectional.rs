@@ -44,6 +44,9 @@ const CELL_WORDS: u64 = 8;
 const CELL_VERTICES: usize = 6 + 1;
 /// Light subpaths per workgroup of the light pass (`@workgroup_size(64)`).
 const LIGHT_WORKGROUP: u32 = 64;
+/// Buckets per workgroup of the grid's prefix sum (`grid_scan_blocks` in
+/// `shaders/hash_grid.wgsl`, which declares it again).
+pub const SCAN_BLOCK: u32 = 1024;
 /// Vertices per light subpath assumed before any is measured: a closed room with albedo 0.8
 /// stores about 4, a white furnace of albedo 0.95 about 20.
 const FIRST_VERTICES_PER_PATH: f64 = 8.0;
@@ -62,7 +65,9 @@ struct Pool {
 struct Merging {
     setup: wgpu::ComputePipeline,
     count: wgpu::ComputePipeline,
-    scan: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    scan_sums: wgpu::ComputePipeline,
+    scan_add: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     sort: wgpu::ComputePipeline,
     /// The tests' search (`grid_query_check`).
@@ -272,7 +277,9 @@ impl Bidirectional {
         let merging = method.merges().then(|| Merging {
             setup: pipeline("grid_setup"),
             count: pipeline("grid_count"),
-            scan: pipeline("grid_scan"),
+            scan_blocks: pipeline("grid_scan_blocks"),
+            scan_sums: pipeline("grid_scan_sums"),
+            scan_add: pipeline("grid_scan_add"),
             scatter: pipeline("grid_scatter"),
             sort: pipeline("grid_sort"),
             query_check: pipeline("grid_query_check"),
@@ -378,6 +385,14 @@ impl GpuRenderer {
         Ok(())
     }
 
+    /// With the `stage-times` feature, waits for the GPU and charges the time since the last
+    /// mark to `stage` (`stage_times.rs`); nothing otherwise.
+    #[inline(always)]
+    fn mark(&self, _stage: &'static str) {
+        #[cfg(feature = "stage-times")]
+        self.stage_times.mark(&self.device, _stage);
+    }
+
     /// Writes `frame` to the uniform and runs one dispatch of `pipeline` with it.
     fn dispatch(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, groups: (u32, u32)) {
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
@@ -417,6 +432,27 @@ impl GpuRenderer {
         }
     }
 
+    /// Runs `pipeline` once per workgroup-sized block `first..end` (`frame.path_origin` + the
+    /// workgroup), in dispatches of at most 65535 workgroups.
+    fn block_dispatches(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        frame: &Frame,
+        first: u32,
+        end: u32,
+    ) {
+        let mut a = first;
+        while a < end {
+            let n = 65_535.min(end - a);
+            let f = Frame {
+                path_origin: a,
+                ..*frame
+            };
+            self.dispatch(pipeline, &f, (n, 1));
+            a += n;
+        }
+    }
+
     /// Builds the hash grid over the pool's light vertices (`shaders/hash_grid.wgsl`), for the
     /// iteration whose frame (with its merge constants) is `frame`, merging within `radius`.
     fn build_grid(&self, frame: &Frame, radius: f32) {
@@ -431,12 +467,21 @@ impl GpuRenderer {
         let buckets = (b.capacity.max(1) as u64).next_power_of_two() as u32;
         self.dispatch(&m.setup, frame, (1, 1));
         self.item_dispatches(&m.count, frame, b.capacity);
-        self.dispatch(&m.scan, frame, (1, 1));
+        self.mark("grid count");
+        // The prefix sum in blocks of SCAN_BLOCK (`hash_grid.wgsl`), for the largest bucket
+        // count; blocks past this iteration's are skipped on the GPU.
+        let blocks = buckets.div_ceil(SCAN_BLOCK);
+        self.block_dispatches(&m.scan_blocks, frame, 0, blocks);
+        self.dispatch(&m.scan_sums, frame, (1, 1));
+        self.block_dispatches(&m.scan_add, frame, 1, blocks);
+        self.mark("grid scan");
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&b.pool.grid_starts, 0, &b.pool.grid_cursor, 0, None);
         self.queue.submit([encoder.finish()]);
         self.item_dispatches(&m.scatter, frame, b.capacity);
+        self.mark("grid scatter");
         self.item_dispatches(&m.sort, frame, buckets);
+        self.mark("grid sort");
     }
 
     /// For tests: the hash grid the GPU builds over `points` (stored as the light vertices of
@@ -600,6 +645,8 @@ impl GpuRenderer {
             Some(4 * CELL_WORDS * MAX_PASS_SPP as u64),
         );
         self.queue.submit([encoder.finish()]);
+        #[cfg(feature = "stage-times")]
+        self.stage_times.start();
         // Film bands: the image, unless its tallies are larger than one binding. Every band
         // traces every light subpath of the iteration (splatting only into the band), so each
         // band's pixels get the whole estimate, and the iteration's image sum gathers all bands.
@@ -646,6 +693,7 @@ impl GpuRenderer {
                     encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(band_pixels), Some(4));
                     self.queue.submit([encoder.finish()]);
                     self.light_dispatches(&wave, y * w, (y1 - y) * w);
+                    self.mark("light");
                     if let Some(camera) = &b.camera_pipeline {
                         if merging {
                             self.build_grid(&wave, radius);
@@ -653,10 +701,12 @@ impl GpuRenderer {
                         } else if y.max(band_start) < y1.min(band_end) {
                             self.row_dispatches(camera, &wave, y.max(band_start), y1.min(band_end));
                         }
+                        self.mark("camera");
                     }
                     y = y1;
                 }
                 self.row_dispatches(&b.resolve_pipeline, &frame, band_start, band_end);
+                self.mark("resolve");
             }
         })?;
 
@@ -671,6 +721,7 @@ impl GpuRenderer {
         );
         self.queue.submit([encoder.finish()]);
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_buffer(&b.tally_readback)?);
+        self.mark("readback");
 
         let mut overflowed = Vec::new();
         let mut most_asked = 0u32;

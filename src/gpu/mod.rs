@@ -5,6 +5,8 @@ pub mod bidirectional;
 pub mod context;
 pub mod render;
 pub mod shader;
+#[cfg(feature = "stage-times")]
+pub mod stage_times;
 
 pub use context::{acquire, Gpu, GpuError};
 pub use render::{Checks, GpuRenderer};

@@ -128,6 +128,15 @@ pub struct GpuRenderer {
     /// measured and updated after every pass.
     pub(super) paths_per_dispatch: u64,
     lost: Arc<(AtomicBool, Mutex<String>)>,
+    #[cfg(feature = "stage-times")]
+    pub(super) stage_times: super::stage_times::StageTimes,
+}
+
+#[cfg(feature = "stage-times")]
+impl Drop for GpuRenderer {
+    fn drop(&mut self) {
+        eprintln!("{} {}", self.method, self.stage_times.report());
+    }
 }
 
 /// Uploads one scene array as it is laid out on the host.
@@ -537,6 +546,8 @@ impl GpuRenderer {
             bidirectional,
             paths_per_dispatch: 1 << 16,
             lost,
+            #[cfg(feature = "stage-times")]
+            stage_times: Default::default(),
         })
     }
 
