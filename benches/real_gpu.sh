@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The GPU backend on a hardware GPU, in one run: the adapter, the integration tests, camera paths/s
+# of every method on both backends, and relMSE against time of every method on the GPU against a
+# deep GPU path-traced reference rendered in the same run.
+#
+#   benches/real_gpu.sh [OUTDIR]        # default out/real_gpu; ~7 min on one H100 and 16 cores
+#
+# Needs only built binaries, no toolchain, so that it runs on a lent machine without cargo:
+#   HEXRAY  the renderer (default target/release/hexray)
+#   TESTS   the integration-test binary (target/release/deps/tests-*, from
+#           `cargo test --release --no-run`); left out when unset
+# SECONDS_PER_CURVE (default 8), REFERENCE_SECONDS (default 30), BENCH_SPP (default 64, at
+# 256x256) and BENCH_SPP_512 (default 256, GPU only) size the run. The tests find
+# the scenes through the path they were built in; where the checkout sits elsewhere, link it
+# there first.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+hexray=${HEXRAY:-target/release/hexray}
+out=${1:-out/real_gpu}
+seconds=${SECONDS_PER_CURVE:-8}
+reference_seconds=${REFERENCE_SECONDS:-30}
+mkdir -p "$out"
+
+step() { echo "== $(date -u +%H:%M:%S) $*"; }
+
+step machine
+{
+    date -u
+    echo "cores: $(nproc)"
+    grep -m1 'model name' /proc/cpuinfo
+    command -v nvidia-smi > /dev/null &&
+        nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv
+} > "$out/machine.txt" 2>&1
+"$hexray" info > "$out/info.txt" 2>&1
+cat "$out/machine.txt" "$out/info.txt"
+grep -q '^\[' "$out/info.txt" || { echo "no GPU adapter: stopping" >&2; exit 1; }
+
+if [ -n "${TESTS:-}" ]; then
+    step "integration tests ($TESTS)"
+    timeout "${TEST_SECONDS:-240}" "$TESTS" --test-threads "$(nproc)" > "$out/tests.log" 2>&1
+    echo "exit status $?" >> "$out/tests.log"
+    grep -E '^test result|FAILED|panicked|exit status' "$out/tests.log" | head -40
+fi
+
+# Camera paths/s (for every method but path a "sample" is an iteration of one light and one
+# camera subpath per pixel). The CPU rows use all of this machine's cores.
+step "bench 256x256, cpu and gpu"
+"$hexray" bench --backend cpu,gpu --method path,light,bdpt,sppm,vcm --spp "${BENCH_SPP:-64}" \
+    --out "$out/bench_256.json" > "$out/bench_256.txt" 2>&1
+cat "$out/bench_256.txt"
+step "bench 512x512, gpu"
+"$hexray" bench --backend gpu --method path,light,bdpt,sppm,vcm --spp "${BENCH_SPP_512:-256}" --width 512 --height 512 \
+    --out "$out/bench_512.json" > "$out/bench_512.txt" 2>&1
+cat "$out/bench_512.txt"
+
+# References: GPU path tracing (unbiased) for REFERENCE_SECONDS, with its variance, so that its
+# own noise can be subtracted; cornell_box has the committed Mitsuba reference.
+seed=777
+for name in tncg15_room glass_room; do
+    step "reference $name: gpu path, $reference_seconds s"
+    "$hexray" render "scenes/$name.json" --backend gpu --method path --time "$reference_seconds" \
+        --width 256 --height 256 --seed $seed --variance --out "$out/refs/${name}_256.exr" 2>&1 |
+        grep '^rendered'
+    seed=$((seed + 1))
+done
+
+for line in "tncg15_room $out/refs/tncg15_room_256.exr" "glass_room $out/refs/glass_room_256.exr" \
+    "cornell_box tests/data/references/cornell_box_256.npy"; do
+    read -r name ref <<< "$line"
+    step "curves $name: gpu path, bdpt, sppm, vcm, $seconds s each"
+    "$hexray" curve "scenes/$name.json" --backend gpu --method path,bdpt,sppm,vcm \
+        --time "$seconds" --reference "$ref" --out "$out/curves/$name" 2>&1 | tail -n 6
+    "$hexray" compare "$ref" "$ref" --json > "$out/curves/$name/reference.json"
+done
+step done
