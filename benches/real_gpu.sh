@@ -60,7 +60,7 @@ for name in tncg15_room glass_room; do
     step "reference $name: gpu path, $reference_seconds s"
     "$hexray" render "scenes/$name.json" --backend gpu --method path --time "$reference_seconds" \
         --width 256 --height 256 --seed $seed --variance --out "$out/refs/${name}_256.exr" 2>&1 |
-        grep '^rendered'
+        grep '^rendered' | tee -a "$out/references.txt"
     seed=$((seed + 1))
 done
 

@@ -3,9 +3,9 @@
 // as vertices); the vertices sorted by bucket with a counting sort in dispatches: grid_setup
 // (the bucket count from the vertex count), grid_count (an atomic count per bucket),
 // grid_scan_blocks, grid_scan_sums and grid_scan_add (the prefix sum), grid_scatter (each vertex
-// to its bucket's next slot, by an atomic cursor), grid_sort (each bucket in the order of its vertices' light
-// subpath and length, which is the CPU's vertex order). So the buckets list the same vertices in
-// the same order on both backends, and merges sum in the same order.
+// to its bucket's next slot, by an atomic cursor), grid_sort (each bucket in the order of its
+// vertices' light subpath and length, which is the CPU's vertex order). So the buckets list the
+// same vertices in the same order on both backends, and merges sum in the same order.
 
 // The grid's constants (`GridParams`): the host writes min, inv_cell and radius2, grid_setup
 // the mask and the count.
@@ -133,7 +133,7 @@ fn grid_scan_blocks(@builtin(local_invocation_index) lid: u32, @builtin(workgrou
     let buckets = grid_params.mask + 1u;
     let block = frame.path_origin + wid.x;
     let first = 1u + block * SCAN_BLOCK + lid * SCAN_PER_THREAD;
-    var v: array<u32, 4>;
+    var v: array<u32, SCAN_PER_THREAD>;
     var total = 0u;
     for (var k = 0u; k < SCAN_PER_THREAD; k++) {
         v[k] = 0u;

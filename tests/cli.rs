@@ -124,33 +124,49 @@ fn a_time_budget_ends_the_render_and_keeps_its_samples() {
     assert!((0.5..5.0).contains(&secs), "rendered for {secs} s");
 }
 
+/// Kills the render when dropped, so that a test failing before it signals the render does not
+/// leave it running on every core.
+#[cfg(unix)]
+struct KillOnDrop(std::process::Child);
+
+#[cfg(unix)]
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// Ctrl-C once the render has samples: it ends after the current pass, writes every sample
 /// taken, and exits 130. The test waits for the render's first checkpoint (written after two
 /// seconds of rendering) rather than a fixed time: start-up differs by machine. On an NVIDIA
 /// H100 (2026-11-26), which `--backend auto` takes, a signal at a fixed 1.5 s found the render
 /// still starting (driver, kernel builds) with no sample taken, so, rightly, nothing was
-/// written. It then removes the checkpoint's files and signals at once, seconds before the next
-/// checkpoint is due, so the image read afterwards is the one written on the signal.
+/// written. The checkpoint's files are then removed before the signal, so the files read
+/// afterwards are those written on it (or by a later checkpoint before it, which would also
+/// hold the samples).
 #[cfg(unix)]
 #[test]
 fn ctrl_c_ends_the_render_and_keeps_its_samples() {
     let dir = temp_dir("ctrlc");
     let exr = dir.join("c.exr");
-    let mut child = hexray()
-        .args([
-            "render",
-            "scenes/tncg15_room.json",
-            "--time",
-            "600",
-            "--checkpoint",
-            "2",
-            "--width",
-            "64",
-        ])
-        .args(["--height", "64", "-q", "--out"])
-        .arg(&exr)
-        .spawn()
-        .unwrap();
+    let mut child = KillOnDrop(
+        hexray()
+            .args([
+                "render",
+                "scenes/tncg15_room.json",
+                "--time",
+                "600",
+                "--checkpoint",
+                "2",
+                "--width",
+                "64",
+            ])
+            .args(["--height", "64", "-q", "--out"])
+            .arg(&exr)
+            .spawn()
+            .unwrap(),
+    );
     let film = dir.join("c.film");
     let waited = std::time::Instant::now();
     while !film.exists() {
@@ -159,7 +175,7 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
             "no checkpoint within 120 s"
         );
         assert!(
-            child.try_wait().unwrap().is_none(),
+            child.0.try_wait().unwrap().is_none(),
             "the render ended early"
         );
         std::thread::sleep(std::time::Duration::from_millis(20));
@@ -169,16 +185,17 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
         std::fs::remove_file(dir.join(f)).unwrap();
     }
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args(["-INT", &child.0.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
-    let status = child.wait().unwrap();
+    let status = child.0.wait().unwrap();
     assert_eq!(status.code(), Some(130), "exit status after Ctrl-C");
     let (_, meta) = read_exr(&exr).unwrap();
     let spp: u32 = meta.get("spp").unwrap().parse().unwrap();
     assert!(spp >= 1, "no samples kept");
     assert!(dir.join("c.png").exists());
+    assert!(film.exists(), "no film to resume from");
 }
 
 /// Where no adapter exists (simulated by asking wgpu for Metal on Linux), `--backend gpu` is a

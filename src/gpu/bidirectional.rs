@@ -468,8 +468,8 @@ impl GpuRenderer {
         self.dispatch(&m.setup, frame, (1, 1));
         self.item_dispatches(&m.count, frame, b.capacity);
         self.mark("grid count");
-        // The prefix sum in blocks of SCAN_BLOCK (`hash_grid.wgsl`), for the largest bucket
-        // count; blocks past this iteration's are skipped on the GPU.
+        // The prefix sum in blocks of SCAN_BLOCK (`hash_grid.wgsl`), dispatched for the largest
+        // bucket count; blocks past this iteration's count scan zeros and store nothing.
         let blocks = buckets.div_ceil(SCAN_BLOCK);
         self.block_dispatches(&m.scan_blocks, frame, 0, blocks);
         self.dispatch(&m.scan_sums, frame, (1, 1));

@@ -135,7 +135,9 @@ pub struct GpuRenderer {
 #[cfg(feature = "stage-times")]
 impl Drop for GpuRenderer {
     fn drop(&mut self) {
-        eprintln!("{} {}", self.method, self.stage_times.report());
+        if !self.stage_times.is_empty() {
+            eprintln!("{} {}", self.method, self.stage_times.report());
+        }
     }
 }
 

@@ -1,9 +1,10 @@
 //! With the `stage-times` feature: where a bidirectional pass's time goes on a given GPU. After
-//! each stage of an iteration (light subpaths, the grid's steps, camera subpaths, resolve) the
-//! host waits for the GPU and adds the wall time since the last mark to that stage, so the
-//! stages no longer overlap with the host's next submissions; the sum is the pass's time with
-//! that overlap removed. The renderer prints the table when it is dropped. Off in every normal
-//! build: the waits cost throughput.
+//! each stage of an iteration (light subpaths, the grid's steps, camera subpaths, resolve, and
+//! the pass's readback) the host waits for the GPU and adds the wall time since the last mark
+//! to that stage, so the stages no longer overlap with the host's next submissions; the sum is
+//! the pass's time with that overlap removed. A renderer that marked anything prints the table
+//! when it is dropped (a bench row's includes its warm-up pass; `grid_check`'s grid marks count
+//! from the last pass). Off in every normal build: the waits cost throughput.
 
 use std::cell::RefCell;
 use std::time::Instant;
@@ -36,6 +37,11 @@ impl StageTimes {
             }
             None => s.push((stage, dt, 1)),
         }
+    }
+
+    /// Whether any stage was timed.
+    pub fn is_empty(&self) -> bool {
+        self.seconds.borrow().is_empty()
     }
 
     /// The table: each stage's seconds, share and count of marks.

@@ -650,9 +650,10 @@ pub fn relmse_between(a: &Film, b: &Film) -> f64 {
 
 /// How two films of the same size differ pixel by pixel: per pixel the mean over channels of
 /// (a − b)²/(b² + 0.01), the term relMSE averages. Returns the number of pixels whose term
-/// exceeds `tol` and the largest term. Two renders of the same streams that differ only by f32
-/// rounding have every term near 1e-14; a flipped discrete decision (Russian roulette, a photon
-/// on the merge radius) moves a few pixels by a whole path's contribution.
+/// exceeds `tol` or is NaN, and the largest term (NaN if any is). Two renders of the same
+/// streams that differ only in f32 arithmetic have small terms (1e-16 to 1e-9 measured); a
+/// flipped discrete decision (Russian roulette, a photon on the merge radius) moves a few pixels
+/// by a whole path's contribution.
 pub fn pixels_differing(a: &Film, b: &Film, tol: f64) -> (usize, f64) {
     use hexray::stats::MeanImage;
     let (a, b) = (MeanImage::from_film(a), MeanImage::from_film(b));
@@ -663,10 +664,12 @@ pub fn pixels_differing(a: &Film, b: &Film, tol: f64) -> (usize, f64) {
             .map(|c| (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01))
             .sum::<f64>()
             / 3.0;
-        if term > tol {
+        if term > tol || term.is_nan() {
             count += 1;
         }
-        worst = worst.max(term);
+        if !worst.is_nan() && (term > worst || term.is_nan()) {
+            worst = term;
+        }
     }
     (count, worst)
 }
