@@ -9,10 +9,13 @@
 #   HEXRAY  the renderer (default target/release/hexray)
 #   TESTS   the integration-test binary (target/release/deps/tests-*, from
 #           `cargo test --release --no-run`); left out when unset
+#   STAGES  a build with `--features stage-times` (where a bidirectional iteration's time
+#           goes, stage by stage); left out when unset
 # SECONDS_PER_CURVE (default 8), REFERENCE_SECONDS (default 30), BENCH_SPP (default 64, at
-# 256x256) and BENCH_SPP_512 (default 256, GPU only) size the run. The tests find
-# the scenes through the path they were built in; where the checkout sits elsewhere, link it
-# there first.
+# 256x256), BENCH_SPP_512 (default 256, GPU only) and GOAL_SPP (default 50, at 800x800) size
+# the run. The tests find the scenes through the path they were built in; where the checkout
+# sits elsewhere, link it there first. On a lent machine the binaries travel stripped (`strip -o`)
+# with the Vulkan loader; docs/bench/2026-11-26_h100/ shows one run and its commands.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 hexray=${HEXRAY:-target/release/hexray}
@@ -52,6 +55,20 @@ step "bench 512x512, gpu"
 "$hexray" bench --backend gpu --method path,light,bdpt,sppm,vcm --spp "${BENCH_SPP_512:-256}" --width 512 --height 512 \
     --out "$out/bench_512.json" > "$out/bench_512.txt" 2>&1
 cat "$out/bench_512.txt"
+
+step "issue 7's goal: tncg15_room 800x800, 50 spp, path (after a warm-up render of the same)"
+"$hexray" bench scenes/tncg15_room.json --backend gpu --width 800 --height 800 \
+    --spp "${GOAL_SPP:-50}" --out "$out/bench_800.json" > "$out/bench_800.txt" 2>&1
+cat "$out/bench_800.txt"
+
+if [ -n "${STAGES:-}" ]; then
+    for size in 256 512; do
+        step "stage times, tncg15_room ${size}x$size"
+        "$STAGES" bench scenes/tncg15_room.json --backend gpu --method bdpt,sppm,vcm --spp 16 \
+            --width $size --height $size --out "$out/stages_$size.json" 2>&1 |
+            tee "$out/stages_$size.txt"
+    done
+fi
 
 # References: GPU path tracing (unbiased) for REFERENCE_SECONDS, with its variance, so that its
 # own noise can be subtracted; cornell_box has the committed Mitsuba reference.
