@@ -40,3 +40,24 @@ fn bench_writes_one_json_row_per_scene_and_backend() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A row too short to time well says so: a 16x16 render of 2 samples takes milliseconds, and the
+/// warning names how many rows and the shortest.
+#[test]
+fn bench_warns_of_rows_too_short_to_time() {
+    let dir = std::env::temp_dir().join(format!("hexray-bench-short-{}", std::process::id()));
+    let o = Command::new(crate::common::hexray_bin())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench", "scenes/cornell_box.json", "--backend", "cpu"])
+        .args(["--spp", "2", "--width", "16", "--height", "16", "--out"])
+        .arg(dir.join("bench.json"))
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("1 of 1 rows took under 0.25 s") && err.contains("raise --spp"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
