@@ -9,7 +9,8 @@
 # in a first calibration render to take about SECONDS (default 30); then each hexray method in
 # METHODS (default "path bdpt vcm sppm", CPU backend, BACKEND to change) renders for exactly as
 # long as that Mitsuba render took (`--time`), 256x256. Every image is compared with the scene's
-# deep reference out/methods/refs/NAME_256.exr (`docs/methods.sh references`), whose own noise
+# deep reference out/methods/refs/NAME_256.exr (`docs/methods.sh references`, or the committed GPU
+# references copied there: tests/data/references/README.md), whose own noise
 # (mean var_r / (r^2 + 0.01)) is subtracted from every relMSE. ALTERNATIONS (default 3) rounds.
 # Prints one table row per render and, per method, the median ratio to Mitsuba and its range.
 # Needs MITSUBA_PYTHON (default $HOME/mi/bin/python) with Mitsuba 3; see ../shared/mitsuba/.

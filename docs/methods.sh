@@ -5,7 +5,10 @@
 # and docs/methods.md from all of it.
 #
 #   docs/methods.sh references   # deep 256x256 BDPT references of tncg15_room and glass_room
-#                                # (out/methods/refs, 25 min each on 2 cores; not committed)
+#                                # (out/methods/refs, 25 min each on 2 cores; not committed);
+#                                # or copy the committed GPU path references there:
+#                                # cp tests/data/references/h100/*.exr out/methods/refs/
+#                                # (tests/data/references/README.md says what they are)
 #   docs/methods.sh run          # curves, Mitsuba, pictures, bench -> docs/methods/
 #                                # (~55 min)
 #   docs/methods.sh readme       # only the README's picture (the default method against path 64 spp)
