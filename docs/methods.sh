@@ -232,8 +232,10 @@ if rows:
 if os.path.exists(f"{out}/readme_default.json"):
     print("## The README's picture\n")
     print("`hexray render` with its defaults (tncg15_room, 512x512, CPU), the old default (path, 64 spp)")
-    print("against the default method for as long, both compared with the 256x256 reference as 2x2")
-    print("block means (`docs/methods.sh readme`):\n")
+    print("against the default method for as long, both compared with the 256x256 reference")
+    print("out/methods/refs/tncg15_room_256.exr as 2x2 block means (`docs/methods.sh readme`; on")
+    print("2026-11-26, on an Intel Xeon VM, against the GPU path reference of")
+    print("`tests/data/references/h100/` copied there, not the CPU BDPT reference of the curves above):\n")
     print("| render | relMSE | minus the reference's noise |")
     print("| --- | --- | --- |")
     vals, secs = {}, {}
