@@ -417,23 +417,13 @@ impl GpuRenderer {
     }
 
     /// Runs `pipeline` once per item `0..count` (`frame.path_origin` + the invocation), in
-    /// dispatches of at most 65535 workgroups of 64.
+    /// workgroups of 64.
     fn item_dispatches(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, count: u32) {
-        let per = 65_535 * LIGHT_WORKGROUP;
-        let mut a = 0;
-        while a < count {
-            let n = per.min(count - a);
-            let f = Frame {
-                path_origin: a,
-                ..*frame
-            };
-            self.dispatch(pipeline, &f, (n.div_ceil(LIGHT_WORKGROUP), 1));
-            a += n;
-        }
+        self.dispatches(pipeline, frame, 0, count, LIGHT_WORKGROUP);
     }
 
     /// Runs `pipeline` once per workgroup-sized block `first..end` (`frame.path_origin` + the
-    /// workgroup), in dispatches of at most 65535 workgroups.
+    /// workgroup).
     fn block_dispatches(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -441,14 +431,28 @@ impl GpuRenderer {
         first: u32,
         end: u32,
     ) {
+        self.dispatches(pipeline, frame, first, end, 1);
+    }
+
+    /// Items `first..end`, `per_group` to a workgroup, in dispatches of at most 65535 workgroups,
+    /// each told its first item in `frame.path_origin`.
+    fn dispatches(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        frame: &Frame,
+        first: u32,
+        end: u32,
+        per_group: u32,
+    ) {
+        let per = 65_535 * per_group;
         let mut a = first;
         while a < end {
-            let n = 65_535.min(end - a);
+            let n = per.min(end - a);
             let f = Frame {
                 path_origin: a,
                 ..*frame
             };
-            self.dispatch(pipeline, &f, (n, 1));
+            self.dispatch(pipeline, &f, (n.div_ceil(per_group), 1));
             a += n;
         }
     }

@@ -635,35 +635,38 @@ pub fn against_truth(
     }
 }
 
-/// relMSE of one film against another of the same size (the second as the reference).
-pub fn relmse_between(a: &Film, b: &Film) -> f64 {
+/// Per pixel, the mean over channels of (a − b)²/(b² + 0.01): the terms relMSE averages (the
+/// second film as the reference).
+pub fn relmse_terms(a: &Film, b: &Film) -> Vec<f64> {
     use hexray::stats::MeanImage;
     let (a, b) = (MeanImage::from_film(a), MeanImage::from_film(b));
-    let mut sum = 0.0;
-    for (x, r) in a.mean.iter().zip(&b.mean) {
-        for c in 0..3 {
-            sum += (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01);
-        }
-    }
-    sum / (3 * a.mean.len()) as f64
+    a.mean
+        .iter()
+        .zip(&b.mean)
+        .map(|(x, r)| {
+            (0..3)
+                .map(|c| (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01))
+                .sum::<f64>()
+                / 3.0
+        })
+        .collect()
 }
 
-/// How two films of the same size differ pixel by pixel: per pixel the mean over channels of
-/// (a − b)²/(b² + 0.01), the term relMSE averages. Returns the number of pixels whose term
-/// exceeds `tol` or is NaN, and the largest term (NaN if any is). Two renders of the same
+/// relMSE of one film against another of the same size (the second as the reference).
+pub fn relmse_between(a: &Film, b: &Film) -> f64 {
+    let terms = relmse_terms(a, b);
+    terms.iter().sum::<f64>() / terms.len() as f64
+}
+
+/// How two films of the same size differ pixel by pixel, by [`relmse_terms`]. Returns the
+/// number of pixels whose term exceeds `tol` or is NaN, and the largest term (NaN if any is). Two renders of the same
 /// streams that differ only in f32 arithmetic have small terms (1e-16 to 1e-9 measured); a
 /// flipped discrete decision (Russian roulette, a photon on the merge radius) moves a few pixels
 /// by a whole path's contribution.
 pub fn pixels_differing(a: &Film, b: &Film, tol: f64) -> (usize, f64) {
-    use hexray::stats::MeanImage;
-    let (a, b) = (MeanImage::from_film(a), MeanImage::from_film(b));
     let mut count = 0;
     let mut worst = 0.0f64;
-    for (x, r) in a.mean.iter().zip(&b.mean) {
-        let term = (0..3)
-            .map(|c| (x[c] - r[c]).powi(2) / (r[c] * r[c] + 0.01))
-            .sum::<f64>()
-            / 3.0;
+    for term in relmse_terms(a, b) {
         if term > tol || term.is_nan() {
             count += 1;
         }
