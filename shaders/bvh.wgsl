@@ -24,7 +24,8 @@ struct Candidate {
 }
 
 // Closest-hit mode (any_hit = false): the nearest intersection with t in (its error bound,
-// t_max). Any-hit mode (any_hit = true), for shadow rays: stops at the first hit within the
+// t_max); of hits at the same t, the one of the lowest prims entry, whatever the order the
+// traversal meets them in (`bvh::nearer`). Any-hit mode (any_hit = true), for shadow rays: stops at the first hit within the
 // open segment (0, t_max), not counting hits within their own error bound of t_max.
 //
 // At each node the four children's boxes are tested at once. The leaves among the hit children
@@ -89,7 +90,7 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
                             best.found = true;
                             return best;
                         }
-                    } else if t < best.t {
+                    } else if t < best.t || (t == best.t && best.found && prim < best.prim) {
                         best = Candidate(true, t, prim, b1, b2);
                     }
                 }

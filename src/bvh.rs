@@ -28,7 +28,7 @@ const MAX_DEPTH: usize = 60;
 pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 /// The CPU's traversal stack over the wide tree: at most seven children pushed per level, and
 /// the wide tree is no deeper than the four-wide one.
-const WIDE_STACK_SIZE: usize = (crate::wide_bvh::WIDTH - 1) * MAX_DEPTH;
+pub(crate) const WIDE_STACK_SIZE: usize = (crate::wide_bvh::WIDTH - 1) * MAX_DEPTH;
 /// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2).
 const TRAVERSAL_COST: f32 = 0.5;
 
@@ -366,20 +366,24 @@ fn partition(v: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
     i
 }
 
-/// The primitive a traversal found nearest so far.
+/// The primitive a traversal found nearest so far, before its surface point is computed
+/// ([`surface_hit`]).
 #[derive(Clone, Copy)]
-struct Candidate {
-    t: f32,
-    prim: u32,
-    b1: f32,
-    b2: f32,
+pub(crate) struct Candidate {
+    pub t: f32,
+    pub prim: u32,
+    pub b1: f32,
+    pub b2: f32,
 }
 
-/// Closest-hit mode: the nearest intersection with `t` in (its error bound, `t_max`).
+/// Closest-hit mode: the nearest intersection with `t` in (its error bound, `t_max`); of hits
+/// at the same t (a ray through an edge two triangles share), the one of the lowest `prims`
+/// entry, so that the hit does not depend on the order the traversal meets them in
+/// ([`nearer`]).
 pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
     let mut best: Option<Candidate> = None;
     traverse(scene, ray, t_max, |prim, t, _t_err, b1, b2, t_limit| {
-        if t < *t_limit {
+        if nearer(t, prim, *t_limit, best) {
             *t_limit = t;
             best = Some(Candidate { t, prim, b1, b2 });
         }
@@ -387,6 +391,15 @@ pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<Sur
     });
     let c = best?;
     Some(surface_hit(scene, ray, c))
+}
+
+/// Whether a hit at `t` on primitive `prim` replaces `best`, the nearest so far (`t_limit` its
+/// t, or the ray's end): nearer, or as near and of a lower `prims` entry. The tie rule makes
+/// the closest hit one primitive whatever the traversal's order (the scalar traversal, the
+/// packets of [`crate::packet`] and `shaders/bvh.wgsl` visit nodes in different orders).
+#[inline]
+pub(crate) fn nearer(t: f32, prim: u32, t_limit: f32, best: Option<Candidate>) -> bool {
+    t < t_limit || (t == t_limit && best.is_some_and(|b| prim < b.prim))
 }
 
 /// Any-hit mode, for shadow rays: is anything within the open segment (0, `t_max`)? A hit within
@@ -597,7 +610,7 @@ pub mod counters {
     }
 }
 
-fn surface_hit(scene: &FlatScene, ray: &Ray, c: Candidate) -> SurfaceHit {
+pub(crate) fn surface_hit(scene: &FlatScene, ray: &Ray, c: Candidate) -> SurfaceHit {
     if c.prim & PRIM_SPHERE_BIT == 0 {
         let tri = &scene.triangles[c.prim as usize];
         let (p, p_err) = triangle_hit_point(tri, c.b1, c.b2);

@@ -26,6 +26,7 @@ pub mod merge;
 pub mod merging;
 pub mod method;
 pub mod output;
+pub mod packet;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -45,31 +45,36 @@ pub fn render_pass(
         .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
         .collect();
     let pixels = &film.pixels;
-    let updated: Vec<(Vec<(usize, crate::film::PixelStats)>, u64)> = tiles
+    let updated: Vec<(Vec<(usize, PixelStats)>, u64)> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
-            let mut out = Vec::with_capacity((TILE * TILE) as usize);
-            let mut rays = 0u64;
+            // The tile's pixels, their paths traced together (`path::trace_pixels`).
+            let mut tile = Vec::with_capacity((TILE * TILE) as usize);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                    let index = (y * w + x) as usize;
-                    let mut stats = pixels[index];
-                    for s in first..first + count {
-                        let sampler = Sampler::new(seed, index as u32, s);
-                        stats.add(trace_path(
-                            scene,
-                            camera,
-                            x,
-                            y,
-                            &sampler,
-                            light_samples,
-                            faults,
-                            &mut rays,
-                        ));
-                    }
-                    out.push((index, stats));
+                    tile.push((y * w + x, x, y));
                 }
             }
+            let mut stats: Vec<PixelStats> =
+                tile.iter().map(|&(i, _, _)| pixels[i as usize]).collect();
+            let mut rays = 0u64;
+            path::trace_pixels(
+                scene,
+                camera,
+                &tile,
+                seed,
+                first,
+                count,
+                light_samples,
+                faults,
+                &mut stats,
+                &mut rays,
+            );
+            let out: Vec<(usize, PixelStats)> = tile
+                .iter()
+                .zip(stats)
+                .map(|(&(i, _, _), s)| (i as usize, s))
+                .collect();
             (out, rays)
         })
         .collect();
