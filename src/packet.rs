@@ -26,9 +26,30 @@ use crate::geometry::{Ray, SurfaceHit};
 /// The most rays a packet holds.
 pub const PACKET: usize = 8;
 
+/// The four-wide trees up to which closest-hit rays go in packets. A packet's incoherent rays
+/// (diffuse bounces) visit the union of their nodes, which pays on the reference scenes' trees
+/// of 7 – 13 nodes (closest-hit packets alone: tncg15_room +11 %, single thread), is even at 61
+/// and 1699 nodes (tncg15_room_x9, bunny_room) and loses at 664 and 470 209 (tncg15_room_x100
+/// −9 %, bunny_room_1m −8 %); docs/performance.md. Shadow rays, all aimed at the lights, pay on
+/// every scene measured and always go in packets.
+pub const PACKET_CLOSEST_MAX_NODES: usize = 64;
+
 /// The nearest hit of each ray (`t` in (its error bound, f32::MAX)), as
-/// [`intersect_closest`] finds it, for any number of rays, eight at a time.
+/// [`intersect_closest`] finds it, for any number of rays: in packets of eight where the tree
+/// is small ([`PACKET_CLOSEST_MAX_NODES`]), one by one elsewhere.
 pub fn intersect_closest_all(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
+    assert_eq!(rays.len(), hits.len());
+    if scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES {
+        intersect_closest_packets(scene, rays, hits);
+        return;
+    }
+    for (r, h) in rays.iter().zip(hits.iter_mut()) {
+        *h = intersect_closest(scene, r, f32::MAX);
+    }
+}
+
+/// [`intersect_closest_all`] in packets of eight whatever the tree.
+pub fn intersect_closest_packets(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
     assert_eq!(rays.len(), hits.len());
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
@@ -499,7 +520,7 @@ mod tests {
             let chunk = &rays[start..(start + size).min(rays.len())];
             let mut hits = vec![None; chunk.len()];
             let mut blocked = vec![false; chunk.len()];
-            intersect_closest_all(&scene, chunk, &mut hits);
+            intersect_closest_packets(&scene, chunk, &mut hits);
             occluded_all(&scene, chunk, &mut blocked);
             for (k, ray) in chunk.iter().enumerate() {
                 let want = intersect_closest(&scene, ray, f32::MAX);
@@ -537,7 +558,7 @@ mod tests {
             let scene = FlatScene::from_tree(tris, vec![], nodes, prims);
             let scalar = intersect_closest(&scene, &ray, f32::MAX).unwrap();
             let mut hits = [None; 3];
-            intersect_closest_all(&scene, &[ray; 3], &mut hits);
+            intersect_closest_packets(&scene, &[ray; 3], &mut hits);
             let packet = hits[1].unwrap();
             assert_eq!(scalar.t, 1.0);
             assert_eq!(scalar.prim, 0, "scalar");
@@ -568,7 +589,7 @@ mod tests {
         let packet = [grazing, inside];
         let mut hits = [None; 2];
         let mut blocked = [false; 2];
-        intersect_closest_all(&scene, &packet, &mut hits);
+        intersect_closest_packets(&scene, &packet, &mut hits);
         occluded_all(&scene, &packet, &mut blocked);
         for (k, ray) in packet.iter().enumerate() {
             let want = intersect_closest(&scene, ray, f32::MAX);
