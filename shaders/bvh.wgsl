@@ -24,9 +24,9 @@ struct Candidate {
 }
 
 // Closest-hit mode (any_hit = false): the nearest intersection with t in (its error bound,
-// t_max); of hits at the same t, the one of the lowest prims entry, whatever the order the
-// traversal meets them in (`bvh::nearer`). Any-hit mode (any_hit = true), for shadow rays: stops at the first hit within the
-// open segment (0, t_max), not counting hits within their own error bound of t_max.
+// t_max); of hits at the same t, the one of the lower primitive id (`bvh::nearer`). Any-hit
+// mode (any_hit = true), for shadow rays: stops at the first hit within the open segment
+// (0, t_max), not counting hits within their own error bound of t_max.
 //
 // At each node the four children's boxes are tested at once. The leaves among the hit children
 // are tested first, so that their hits lower best.t before anything is pushed; then the nearest

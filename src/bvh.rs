@@ -1,7 +1,8 @@
 //! The bounding volume hierarchy: a binned-SAH build of a binary tree, collapsed into a
 //! four-wide tree of depth-first nodes that hold their children's boxes ([`BvhNode`]), and the
-//! one traversal (closest hit or any hit) that the CPU integrator uses and `shaders/bvh.wgsl`
-//! repeats.
+//! traversal of one ray (closest hit or any hit) that the CPU's integrators use and
+//! `shaders/bvh.wgsl` repeats; the path tracer traces its rays eight at a time instead where that
+//! pays ([`crate::packet`], the same hits).
 
 use crate::flat::{
     BvhNode, FlatScene, Sphere, Triangle, EMPTY_SLOT, PRIM_PADDING, PRIM_SPHERE_BIT,
@@ -377,8 +378,7 @@ pub(crate) struct Candidate {
 }
 
 /// Closest-hit mode: the nearest intersection with `t` in (its error bound, `t_max`); of hits
-/// at the same t (a ray through an edge two triangles share), the one of the lowest `prims`
-/// entry, so that the hit does not depend on the order the traversal meets them in
+/// at the same t (a ray through an edge two triangles share), the one of the lower primitive id
 /// ([`nearer`]).
 pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
     let mut best: Option<Candidate> = None;
@@ -393,10 +393,13 @@ pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<Sur
     Some(surface_hit(scene, ray, c))
 }
 
-/// Whether a hit at `t` on primitive `prim` replaces `best`, the nearest so far (`t_limit` its
-/// t, or the ray's end): nearer, or as near and of a lower `prims` entry. The tie rule makes
-/// the closest hit one primitive whatever the traversal's order (the scalar traversal, the
-/// packets of [`crate::packet`] and `shaders/bvh.wgsl` visit nodes in different orders).
+/// Whether a hit at `t` on primitive `prim` (its id as `prims` holds it: a triangle's index, or
+/// a sphere's with the sphere bit) replaces `best`, the nearest so far (`t_limit` its t, or the
+/// ray's end): nearer, or as near and of a lower id. The scalar traversal, the packets of
+/// [`crate::packet`] and `shaders/bvh.wgsl` visit nodes in different orders; with this rule they
+/// keep the same primitive of two met at the same t. One case remains: once the first sets
+/// `t_limit`, a leaf whose box's entry distance rounds above that t is skipped, so where the
+/// other lies in such a leaf the order still decides.
 #[inline]
 pub(crate) fn nearer(t: f32, prim: u32, t_limit: f32, best: Option<Candidate>) -> bool {
     t < t_limit || (t == t_limit && best.is_some_and(|b| prim < b.prim))

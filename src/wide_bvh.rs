@@ -6,8 +6,8 @@
 //! four-wide slab tests, which the core runs side by side in about the time of one, and the
 //! tree has about half the levels. The leaves are the four-wide tree's own (the same `prims`
 //! ranges, starting at multiples of four for the triangle packs), in the same slot order, so
-//! a traversal reports the same hits, and the nearest is the same primitive but for exact ties
-//! in t.
+//! a traversal reports the same hits, and the nearest is the same primitive (ties in t go to
+//! the lower primitive id, `bvh::nearer`).
 
 use crate::flat::{BvhNode, EMPTY_SLOT};
 use crate::geometry::intersect_boxes4;

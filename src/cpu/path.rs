@@ -416,8 +416,9 @@ pub fn add_next_event(path: &mut PathState, event: &NextEvent, clear: bool) {
 }
 
 /// The end of a bounce, once its next-event light is in: under `Faults::grey_indirect`, the
-/// radiance gathered up to the first diffuse bounce is kept (a path that ended at a black
-/// emitter may keep it too, with nothing gathered after it: the same estimate).
+/// radiance gathered up to the first diffuse bounce is kept. (`bsdf_pdf` is that of the BSDF
+/// sample this bounce took, or, where the path ended before step 5, of an earlier one, which
+/// was positive only if the snapshot was taken then.)
 #[inline]
 pub fn end_bounce(path: &mut PathState, faults: Faults) {
     if faults.grey_indirect && path.bsdf_pdf > 0.0 && path.before_indirect.is_none() {
