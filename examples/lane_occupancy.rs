@@ -25,7 +25,8 @@ use hexray::camera::Camera;
 use hexray::cpu::{trace_path, Faults};
 use hexray::flat::FlatScene;
 use hexray::sampling::Sampler;
-use hexray::scene::Scene;
+
+mod common;
 
 const SIZE: u32 = 256;
 const SAMPLES: u32 = 16;
@@ -53,25 +54,14 @@ fn main() {
         }
         None => 8,
     };
-    if args.is_empty() {
-        args = ["tncg15_room", "cornell_box", "glass_room"]
-            .iter()
-            .map(|s| format!("{}/scenes/{s}.json", env!("CARGO_MANIFEST_DIR")))
-            .collect();
-    }
+    args = common::scene_paths(args);
     println!("{SIZE}x{SIZE}, {SAMPLES} samples, groups of {lanes} neighbouring pixels of a row");
     println!(
         "scene            samples  bounces/path  max in group  bounce occupancy  steps/ray  traversal occupancy"
     );
     println!("                 a lane");
     for path in &args {
-        let scene = match Scene::load(std::path::Path::new(path)) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("error: {e}");
-                std::process::exit(2);
-            }
-        };
+        let scene = common::load(path);
         let mut flat = FlatScene::build(&scene);
         // The shader traverses the four-wide tree: count its nodes, not the CPU's wide ones.
         flat.wide = hexray::wide_bvh::one_for_one(&flat.nodes);
@@ -91,9 +81,7 @@ fn main() {
                     .collect()
             })
             .collect();
-        let name = std::path::Path::new(path)
-            .file_stem()
-            .map_or(path.clone(), |s| s.to_string_lossy().into_owned());
+        let name = common::name(path);
         for per_lane in [1, SAMPLES] {
             let o = occupancy(&paths, lanes, per_lane as usize);
             println!(

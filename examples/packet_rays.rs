@@ -19,8 +19,9 @@ use hexray::geometry::{offset_ray_origin, Ray};
 use hexray::light::sample_emitter;
 use hexray::packet::{intersect_closest_packets, occluded_all};
 use hexray::sampling::{orthonormal_basis, pcg4d, sample_cosine_hemisphere, u32_to_unit_f32};
-use hexray::scene::Scene;
 use std::time::Instant;
+
+mod common;
 
 const SIZE: u32 = 256;
 
@@ -41,23 +42,11 @@ fn best_of_five(mut f: impl FnMut()) -> f64 {
 }
 
 fn main() {
-    let mut args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() {
-        args = ["tncg15_room", "cornell_box", "glass_room"]
-            .iter()
-            .map(|s| format!("{}/scenes/{s}.json", env!("CARGO_MANIFEST_DIR")))
-            .collect();
-    }
+    let args = common::scene_paths(std::env::args().skip(1).collect());
     println!("{SIZE}x{SIZE} pixels' second-bounce rays, one thread, ns a ray (best of 5)");
     println!("scene                four-wide nodes  closest: one  packet  ratio   shadow: one  packet  ratio");
     for path in &args {
-        let scene = match Scene::load(std::path::Path::new(path)) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("error: {e}");
-                std::process::exit(2);
-            }
-        };
+        let scene = common::load(path);
         let flat = FlatScene::build(&scene);
         let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
         let (mut bounce, mut shadow) = (Vec::new(), Vec::new());
@@ -99,9 +88,7 @@ fn main() {
         });
         let shadow_packet = best_of_five(|| occluded_all(&flat, &shadow, &mut blocked));
         let ns = |s: f64, n: usize| s * 1e9 / n as f64;
-        let name = std::path::Path::new(path)
-            .file_stem()
-            .map_or(path.clone(), |s| s.to_string_lossy().into_owned());
+        let name = common::name(path);
         println!(
             "{name:<20} {:>15} {:>13.1} {:>7.1} {:>6.2} {:>13.1} {:>7.1} {:>6.2}",
             flat.nodes.len(),

@@ -4,7 +4,10 @@
 //
 // A path is `start_path`, then `path_bounce` until it returns false, then `finish_path`: the
 // CPU's `trace_path` for one sample. Here `render` runs that sequence for all of a pass's
-// samples of a pixel in one loop of bounces (path regeneration), in sample order.
+// samples of a pixel in one loop of bounces (path regeneration), in sample order. The CPU's
+// renders split a bounce further (`shade_hit`, `add_next_event`, `end_bounce`) so that a round's
+// shadow rays are traced together; step 4's light is added there before the next bounce's, and
+// the grey-indirect snapshot of step 5 is taken in `end_bounce`, after it: the same sums.
 
 const RR_START_BOUNCE: u32 = 3u;
 const RR_MAX_SURVIVAL: f32 = 0.95;

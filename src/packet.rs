@@ -39,27 +39,28 @@ pub const PACKET_CLOSEST_MAX_NODES: usize = 64;
 /// [`intersect_closest`] finds it, for any number of rays: in packets of eight where the tree
 /// is small ([`PACKET_CLOSEST_MAX_NODES`]), one by one elsewhere.
 pub fn intersect_closest_all(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
-    assert_eq!(rays.len(), hits.len());
-    if scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES {
-        intersect_closest_packets(scene, rays, hits);
-        return;
-    }
-    for (r, h) in rays.iter().zip(hits.iter_mut()) {
-        *h = intersect_closest(scene, r, f32::MAX);
-    }
+    let packets = scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES;
+    closest(scene, rays, hits, packets);
 }
 
 /// [`intersect_closest_all`] in packets of eight whatever the tree.
 pub fn intersect_closest_packets(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
+    closest(scene, rays, hits, true);
+}
+
+/// The nearest hits, in packets where `packets` holds and the CPU has AVX, else one by one.
+fn closest(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>], packets: bool) {
     assert_eq!(rays.len(), hits.len());
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
+    if packets && std::arch::is_x86_feature_detected!("avx") {
         for (r, h) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
             // SAFETY: the CPU has AVX (checked above).
             unsafe { avx::closest(scene, r, h) };
         }
         return;
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = packets;
     for (r, h) in rays.iter().zip(hits.iter_mut()) {
         *h = intersect_closest(scene, r, f32::MAX);
     }

@@ -22,7 +22,10 @@ use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::packet::{intersect_closest_all, occluded_all};
-use crate::sampling::{dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA};
+use crate::sampling::{
+    dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA, MAX_LIGHT_SAMPLES,
+};
+use arrayvec::ArrayVec;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -80,8 +83,8 @@ impl Default for Faults {
 }
 
 /// The radiance arriving at pixel (x, y) along one camera sample's path, with `light_samples`
-/// shadow rays at every diffuse vertex (1 is the default; see step 4). `rays` counts the rays
-/// traced (closest-hit and shadow), for the benchmark's rays/s.
+/// shadow rays at every diffuse vertex (1 is the default, at most `MAX_LIGHT_SAMPLES`; see
+/// step 4). `rays` counts the rays traced (closest-hit and shadow), for the benchmark's rays/s.
 ///
 /// The path is started ([`start_path`]), advanced one bounce at a time ([`path_bounce`]) until
 /// it ends, and finished ([`finish_path`]). [`trace_pixels`] runs the same steps for many
@@ -100,16 +103,7 @@ pub fn trace_path(
     rays: &mut u64,
 ) -> Vec3 {
     let mut path = start_path(camera, x, y, sampler);
-    let mut events = Vec::with_capacity(light_samples.max(1) as usize);
-    while path_bounce(
-        scene,
-        &mut path,
-        sampler,
-        light_samples,
-        faults,
-        &mut events,
-        rays,
-    ) {}
+    while path_bounce(scene, &mut path, sampler, light_samples, faults, rays) {}
     finish_path(&path)
 }
 
@@ -258,8 +252,7 @@ pub fn start_path(camera: &Camera, x: u32, y: u32, sampler: &Sampler) -> PathSta
 }
 
 /// Steps 2 to 6 of one bounce: traces `path.ray`, adds what it finds to `path.radiance` and
-/// prepares the next ray; false when the path has ended. `events` is scratch space for step 4's
-/// shadow rays.
+/// prepares the next ray; false when the path has ended.
 #[inline]
 pub fn path_bounce(
     scene: &FlatScene,
@@ -267,7 +260,6 @@ pub fn path_bounce(
     sampler: &Sampler,
     light_samples: u32,
     faults: Faults,
-    events: &mut Vec<NextEvent>,
     rays: &mut u64,
 ) -> bool {
     // Step 2 - closest hit: the nearest surface along the ray over the BVH; nothing is
@@ -276,9 +268,18 @@ pub fn path_bounce(
     let Some(hit) = intersect_closest(scene, &path.ray, f32::MAX) else {
         return false;
     };
-    events.clear();
-    let going_on = shade_hit(scene, path, &hit, sampler, light_samples, faults, events);
-    for event in events.iter() {
+    // Step 4's shadow rays, at most MAX_LIGHT_SAMPLES, on the stack.
+    let mut events = ArrayVec::<NextEvent, { MAX_LIGHT_SAMPLES as usize }>::new();
+    let going_on = shade_hit(
+        scene,
+        path,
+        &hit,
+        sampler,
+        light_samples,
+        faults,
+        &mut events,
+    );
+    for event in &events {
         *rays += 1;
         add_next_event(path, event, !occluded(scene, &event.ray, 1.0));
     }
@@ -305,7 +306,7 @@ pub fn shade_hit(
     sampler: &Sampler,
     light_samples: u32,
     faults: Faults,
-    events: &mut Vec<NextEvent>,
+    events: &mut impl Extend<NextEvent>,
 ) -> bool {
     // N light samples and one BSDF sample per vertex: Veach's multi-sample MIS weighs each
     // strategy by n_i · p_i (eq. 9.13), so N enters both weights and divides the NEE sum.
@@ -367,10 +368,10 @@ pub fn shade_hit(
                 let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let f = albedo * FRAC_1_PI;
                 let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
-                events.push(NextEvent {
+                events.extend([NextEvent {
                     ray: shadow,
                     value: path.throughput * f * ls.le * (cos_s * w / (n_light * light_pdf)),
-                });
+                }]);
             }
         }
     }
