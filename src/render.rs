@@ -142,15 +142,17 @@ pub fn available_memory() -> Option<u64> {
 /// how many pixels trace several camera subpaths per iteration.
 pub fn bidirectional_provenance(
     shadow_threshold: f32,
-    pixels_with_more_camera_subpaths: usize,
+    camera_subpaths: &[u32],
 ) -> Vec<(&'static str, String)> {
+    let more = camera_subpaths.iter().filter(|&&n| n > 1);
     vec![
         ("shadow_rr_threshold", format!("{shadow_threshold:e}")),
         (
             "specular_camera_subpaths",
             format!(
-                "{} in {pixels_with_more_camera_subpaths} pixels",
-                crate::subpath::SPECULAR_CAMERA_SUBPATHS
+                "{} in {} pixels",
+                more.clone().max().copied().unwrap_or(1),
+                more.count()
             ),
         ),
     ]
@@ -228,10 +230,9 @@ impl Backend for CpuBackend<'_> {
     }
     fn provenance(&self) -> Vec<(&'static str, String)> {
         let mut out = match &self.buffers {
-            Some(b) if self.method.connects() => bidirectional_provenance(
-                b.shadow_threshold,
-                b.camera_subpaths.iter().filter(|&&n| n > 1).count(),
-            ),
+            Some(b) if self.method.connects() => {
+                bidirectional_provenance(b.shadow_threshold, &b.camera_subpaths)
+            }
             _ => Vec::new(),
         };
         if let (Some(b), true) = (&self.buffers, self.method.merges()) {

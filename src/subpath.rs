@@ -39,17 +39,19 @@
 use crate::bvh::intersect_closest;
 use crate::camera::Camera;
 use crate::flat::{FlatScene, KIND_GLASS, KIND_MIRROR};
+use crate::method::Method;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass.
-/// There the camera subpath is all BDPT has: light tracing cannot reach the pixel, and what is
-/// seen in the mirror (a wall lit through the mirror: camera - mirror - diffuse - mirror -
-/// light) is found by the camera subpath alone, as in path tracing. With one camera subpath per
-/// iteration those pixels would get a third of path tracing's samples at equal time (an
-/// iteration costs about three path-traced samples), so they take several. Measured by editing
-/// this constant (tncg15_room and glass_room, 256x256, 30 s on 2 cores, seed 9, relMSE against
-/// the BDPT references of `docs/methods.sh references`, whose own noise is 2.1e-4 and 1.4e-4):
+/// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass,
+/// for BDPT and SPPM (and VCM without merging, which is BDPT). There the camera subpath is all
+/// BDPT has: light tracing cannot reach the pixel, and what is seen in the mirror (a wall lit
+/// through the mirror: camera - mirror - diffuse - mirror - light) is found by the camera
+/// subpath alone, as in path tracing. With one camera subpath per iteration those pixels would
+/// get a third of path tracing's samples at equal time (an iteration costs about three
+/// path-traced samples), so they take several. Measured by editing this constant (tncg15_room
+/// and glass_room, 256x256, 30 s on 2 cores, seed 9, relMSE against the BDPT references of
+/// `docs/methods.sh references`, whose own noise is 2.1e-4 and 1.4e-4):
 ///
 /// | camera subpaths | 1 | 3 | 5 | 8 |
 /// | --- | --- | --- | --- | --- |
@@ -57,30 +59,68 @@ use glam::Vec3;
 /// | glass_room | 3.6e-3 | 2.0e-3 | 1.8e-3 | 1.7e-3 |
 ///
 /// 5 and 8 are within the runs' noise of each other; 5 leaves more iterations (light subpaths)
-/// to the rest of the image.
+/// to the rest of the image. Measured again for BDPT on 2026-11-26 (seed 11, the H100's
+/// references, their noise subtracted): 5 still leads, 3 and 2 give 1.16 and 1.44 times its
+/// relMSE on tncg15_room, 1.07 and 1.27 on glass_room.
 pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 
-/// n_c(j) for every pixel j, row by row: [`SPECULAR_CAMERA_SUBPATHS`] where the ray through the
-/// pixel's centre first meets a mirror or glass, 1 elsewhere. A property of the pixel, fixed
-/// before rendering and shared by both backends, so the MIS weights stay functions of the path
-/// (the pixel a path passes is part of it).
-pub fn camera_subpaths(scene: &FlatScene, camera: &Camera) -> Vec<u32> {
+/// Camera subpaths per iteration in such a pixel for VCM with merging
+/// ([`specular_camera_subpaths`]). Merging gives the camera subpath that goes on through the
+/// mirror what BDPT lacks there: its first diffuse vertex behind the mirror merges the light
+/// that arrived by way of the mirror or glass, so a few camera subpaths do what five do
+/// without merging, and each one saved leaves time to more iterations for the whole image
+/// (a camera subpath with its connections and merges is most of an iteration's cost). Measured
+/// on 2026-11-26 by editing the constant (256x256, 30 s on 2 cores, seeds 11, 12 and 13, mean
+/// relMSE against the H100's references minus their noise, and its ratio to 5's):
+///
+/// | camera subpaths | 1 (seed 11) | 2 | 3 | 5 |
+/// | --- | --- | --- | --- | --- |
+/// | tncg15_room | 1.52e-3 (0.97) | 1.40e-3 (0.90) | 1.45e-3 (0.93) | 1.57e-3 |
+/// | glass_room | 1.66e-3 (1.06) | 1.48e-3 (0.95) | 1.46e-3 (0.93) | 1.57e-3 |
+///
+/// 2 and 3 are within the runs' noise of each other; 2 costs less.
+pub const SPECULAR_CAMERA_SUBPATHS_MERGING: u32 = 2;
+
+/// n_c where a pixel's centre ray first meets a mirror or glass, for `method` with the initial
+/// merge radius `radius` (0 where the method does not merge): VCM that merges takes
+/// [`SPECULAR_CAMERA_SUBPATHS_MERGING`], every other method [`SPECULAR_CAMERA_SUBPATHS`], so
+/// VCM with the radius 0 is BDPT in this too.
+pub fn specular_camera_subpaths(method: Method, radius: f32) -> u32 {
+    if method == Method::Vcm && radius > 0.0 {
+        SPECULAR_CAMERA_SUBPATHS_MERGING
+    } else {
+        SPECULAR_CAMERA_SUBPATHS
+    }
+}
+
+/// Whether the ray through the centre of pixel j first meets a mirror or glass, for every
+/// pixel j, row by row: the pixels that trace several camera subpaths per iteration.
+pub fn specular_pixels(scene: &FlatScene, camera: &Camera) -> Vec<bool> {
     let mut out = Vec::with_capacity(camera.width as usize * camera.height as usize);
     for y in 0..camera.height {
         for x in 0..camera.width {
-            let specular = intersect_closest(scene, &camera.ray(x, y, 0.5, 0.5), f32::MAX)
-                .is_some_and(|hit| {
-                    let kind = scene.materials[hit.material as usize].kind;
-                    kind == KIND_MIRROR || kind == KIND_GLASS
-                });
-            out.push(if specular {
-                SPECULAR_CAMERA_SUBPATHS
-            } else {
-                1
-            });
+            out.push(
+                intersect_closest(scene, &camera.ray(x, y, 0.5, 0.5), f32::MAX).is_some_and(
+                    |hit| {
+                        let kind = scene.materials[hit.material as usize].kind;
+                        kind == KIND_MIRROR || kind == KIND_GLASS
+                    },
+                ),
+            );
         }
     }
     out
+}
+
+/// n_c(j) for every pixel j, row by row: `specular` (see [`specular_camera_subpaths`]) in the
+/// [`specular_pixels`], 1 elsewhere. A property of the pixel, fixed before rendering and shared
+/// by both backends, so the MIS weights stay functions of the path (the pixel a path passes is
+/// part of it).
+pub fn camera_subpaths(scene: &FlatScene, camera: &Camera, specular: u32) -> Vec<u32> {
+    specular_pixels(scene, camera)
+        .into_iter()
+        .map(|s| if s { specular } else { 1 })
+        .collect()
 }
 
 /// The shadow-ray threshold as a share of the image's mean radiance (see [`shadow_survival`]).
@@ -487,5 +527,22 @@ pub fn merge_survival(
         1.0
     } else {
         bound / threshold
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// VCM that merges traces fewer camera subpaths behind mirrors and glass than BDPT; VCM
+    /// with the radius 0 traces BDPT's number, so that it stays BDPT.
+    #[test]
+    fn only_vcm_that_merges_takes_fewer_specular_camera_subpaths() {
+        let bdpt = specular_camera_subpaths(Method::Bdpt, 0.0);
+        assert_eq!(specular_camera_subpaths(Method::Vcm, 0.0), bdpt);
+        assert_eq!(specular_camera_subpaths(Method::Bdpt, 0.1), bdpt);
+        assert_eq!(specular_camera_subpaths(Method::Sppm, 0.1), bdpt);
+        let vcm = specular_camera_subpaths(Method::Vcm, 1e-6);
+        assert!(vcm < bdpt, "{vcm} against {bdpt}");
     }
 }

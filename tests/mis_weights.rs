@@ -33,10 +33,12 @@ use hexray::cpu::light_path::is_diffuse;
 use hexray::flat::{FlatScene, KIND_EMITTER};
 use hexray::geometry::{offset_ray_origin, Ray};
 use hexray::light::emitter_pdf_area;
+use hexray::method::Method;
 use hexray::sampling::Sampler;
 use hexray::subpath::{
-    camera_subpaths, weight_connection, weight_emission, weight_light_point_to_camera,
-    weight_merge, weight_next_event, weight_to_camera, MergeMis, SubpathMis,
+    camera_subpaths, specular_camera_subpaths, weight_connection, weight_emission,
+    weight_light_point_to_camera, weight_merge, weight_next_event, weight_to_camera, MergeMis,
+    SubpathMis,
 };
 use std::f32::consts::FRAC_1_PI;
 
@@ -297,7 +299,11 @@ fn sums_with(
     );
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
-    let n_c = camera_subpaths(&flat, &camera);
+    let n_c = camera_subpaths(
+        &flat,
+        &camera,
+        specular_camera_subpaths(Method::Vcm, radius),
+    );
     let (mut paths, mut longest, mut specular, mut worst) = (0, 0, false, 0.0f32);
     for index in 0..walks {
         let walk = walk(&flat, &camera, index, length);

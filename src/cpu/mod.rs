@@ -133,7 +133,11 @@ impl LightPassBuffers {
             grid_min: crate::merging::scene_bounds(scene).0,
             radius,
             camera_subpaths: if bdpt {
-                crate::subpath::camera_subpaths(scene, camera)
+                crate::subpath::camera_subpaths(
+                    scene,
+                    camera,
+                    crate::subpath::specular_camera_subpaths(method, radius.initial),
+                )
             } else {
                 vec![1; camera.width as usize * camera.height as usize]
             },

@@ -106,8 +106,26 @@ pub struct Bidirectional {
     vertices_per_path: f64,
     /// Iterations traced again after a wave overflowed the pool.
     pub retraced: u64,
-    /// Pixels with n_c > 1 (for the provenance).
-    specular_pixels: usize,
+    /// The pixels whose centre ray meets a mirror or glass (`subpath::specular_pixels`).
+    specular: Vec<bool>,
+    /// n_c per pixel (for the provenance).
+    camera_subpaths: Vec<u32>,
+}
+
+/// n_c per pixel: `count` in the `specular` pixels, 1 elsewhere (`subpath::camera_subpaths`).
+fn camera_subpath_counts(specular: &[bool], count: u32) -> Vec<u32> {
+    specular
+        .iter()
+        .map(|&s| if s { count } else { 1 })
+        .collect()
+}
+
+/// The camera radiance buffer's lanes at the start of an iteration, (0, 0, 0, n_c), per pixel.
+fn camera_radiance_lanes(camera_subpaths: &[u32]) -> Vec<[f32; 4]> {
+    camera_subpaths
+        .iter()
+        .map(|&n| [0.0, 0.0, 0.0, n as f32])
+        .collect()
 }
 
 /// Word offsets into the tallies (`shaders/splat.wgsl`) for an image of `pixels` pixels.
@@ -228,21 +246,20 @@ impl Bidirectional {
         };
         let tallies = storage(device, "tallies", tallies_size);
         // Each pixel's camera radiance of the iteration, and in the fourth lane its n_c
-        // (`subpath::camera_subpaths`, 1 for light tracing).
-        let specular_pixels = match method {
-            Method::Light => 0,
-            _ => crate::subpath::camera_subpaths(scene, camera)
-                .iter()
-                .filter(|&&n| n > 1)
-                .count(),
+        // (`subpath::camera_subpaths`, 1 for light tracing), for the default radius until
+        // `GpuRenderer::set_merge_radius` says otherwise.
+        let specular = match method {
+            Method::Light => vec![false; pixels as usize],
+            _ => crate::subpath::specular_pixels(scene, camera),
         };
-        let n_c: Vec<[f32; 4]> = match method {
-            Method::Light => vec![[0.0, 0.0, 0.0, 1.0]; pixels as usize],
-            _ => crate::subpath::camera_subpaths(scene, camera)
-                .iter()
-                .map(|&n| [0.0, 0.0, 0.0, n as f32])
-                .collect(),
-        };
+        let camera_subpaths = camera_subpath_counts(
+            &specular,
+            crate::subpath::specular_camera_subpaths(
+                method,
+                MergeRadius::default_for(scene).initial,
+            ),
+        );
+        let n_c = camera_radiance_lanes(&camera_subpaths);
         let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera radiance"),
             contents: bytemuck::cast_slice(&n_c[..band_pixels as usize]),
@@ -305,7 +322,8 @@ impl Bidirectional {
             n_c,
             vertices_per_path: FIRST_VERTICES_PER_PATH,
             retraced: 0,
-            specular_pixels,
+            specular,
+            camera_subpaths,
         })
     }
 }
@@ -348,7 +366,7 @@ impl GpuRenderer {
                 let mut v = if self.method.connects() {
                     crate::render::bidirectional_provenance(
                         self.frame.shadow_threshold,
-                        b.specular_pixels,
+                        &b.camera_subpaths,
                     )
                 } else {
                     Vec::new()
@@ -409,10 +427,23 @@ impl GpuRenderer {
         self.queue.submit([encoder.finish()]);
     }
 
-    /// The merge radius's schedule of SPPM and VCM (`--radius`, `--alpha`).
+    /// The merge radius's schedule of SPPM and VCM (`--radius`, `--alpha`), and with it n_c
+    /// (`subpath::specular_camera_subpaths`: VCM with the radius 0 is BDPT).
     pub fn set_merge_radius(&mut self, radius: MergeRadius) {
-        if let Some(m) = self.bidirectional.as_mut().and_then(|b| b.merging.as_mut()) {
+        let method = self.method;
+        let Some(b) = self.bidirectional.as_mut() else {
+            return;
+        };
+        if let Some(m) = b.merging.as_mut() {
             m.radius = radius;
+        }
+        if method != Method::Light {
+            let count = crate::subpath::specular_camera_subpaths(method, radius.initial);
+            b.camera_subpaths = camera_subpath_counts(&b.specular, count);
+            b.n_c = camera_radiance_lanes(&b.camera_subpaths);
+            let band = b.band_pixels as usize;
+            self.queue
+                .write_buffer(&b.camera_radiance, 0, bytemuck::cast_slice(&b.n_c[..band]));
         }
     }
 
