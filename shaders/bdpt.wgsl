@@ -5,7 +5,9 @@
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
 // rouletted by its contribution. With photons, the camera pass of the merging methods: VCM adds
 // the merges at every diffuse vertex (hash_grid.wgsl), SPPM merges at the first diffuse vertex
-// alone.
+// alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
+// rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
+// then sums each subpath's terms in the order met, which gives the same sums.
 
 // Whether the method takes BDPT's strategies (BDPT, VCM; not SPPM).
 fn connects() -> bool {
@@ -15,7 +17,7 @@ fn connects() -> bool {
 // Whether surface points a and b (points, error bounds, unit normals) see each other, after
 // Russian roulette on the ray by `value`, the contribution it would bring (drawing u): the factor
 // to multiply the contribution by, 1 / q where the ray was traced and found clear, else 0
-// (`CameraPass::visibility`).
+// (`CameraPass::visibility`, which leaves the ray to be traced with the tile's).
 fn visibility(a_p: vec3<f32>, a_err: vec3<f32>, a_n: vec3<f32>, b_p: vec3<f32>, b_err: vec3<f32>, b_n: vec3<f32>, value: vec3<f32>, u: f32) -> f32 {
     let q = shadow_survival(value, frame.shadow_threshold);
     if u >= q {

@@ -112,14 +112,14 @@ pub fn specular_pixels(scene: &FlatScene, camera: &Camera) -> Vec<bool> {
     out
 }
 
-/// n_c(j) for every pixel j, row by row: `specular` (see [`specular_camera_subpaths`]) in the
-/// [`specular_pixels`], 1 elsewhere. A property of the pixel, fixed before rendering and shared
-/// by both backends, so the MIS weights stay functions of the path (the pixel a path passes is
-/// part of it).
-pub fn camera_subpaths(scene: &FlatScene, camera: &Camera, specular: u32) -> Vec<u32> {
-    specular_pixels(scene, camera)
-        .into_iter()
-        .map(|s| if s { specular } else { 1 })
+/// n_c(j) for every pixel j, row by row: `count` (see [`specular_camera_subpaths`]) in the
+/// `specular` pixels ([`specular_pixels`]), 1 elsewhere. A property of the pixel, fixed before
+/// rendering and shared by both backends, so the MIS weights stay functions of the path (the
+/// pixel a path passes is part of it).
+pub fn camera_subpaths(specular: &[bool], count: u32) -> Vec<u32> {
+    specular
+        .iter()
+        .map(|&s| if s { count } else { 1 })
         .collect()
 }
 

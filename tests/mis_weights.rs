@@ -36,7 +36,7 @@ use hexray::light::emitter_pdf_area;
 use hexray::method::Method;
 use hexray::sampling::Sampler;
 use hexray::subpath::{
-    camera_subpaths, specular_camera_subpaths, weight_connection, weight_emission,
+    camera_subpaths, specular_camera_subpaths, specular_pixels, weight_connection, weight_emission,
     weight_light_point_to_camera, weight_merge, weight_next_event, weight_to_camera, MergeMis,
     SubpathMis,
 };
@@ -300,8 +300,7 @@ fn sums_with(
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
     let n_c = camera_subpaths(
-        &flat,
-        &camera,
+        &specular_pixels(&flat, &camera),
         specular_camera_subpaths(Method::Vcm, radius),
     );
     let (mut paths, mut longest, mut specular, mut worst) = (0, 0, false, 0.0f32);

@@ -29,7 +29,7 @@
 //! which sums to the same estimate.
 
 use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
-use crate::bvh::{intersect_closest, occluded};
+use crate::bvh::intersect_closest;
 use crate::camera::Camera;
 use crate::cpu::light_path::{is_diffuse, max_path_edges};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
@@ -37,6 +37,7 @@ use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::packet::occluded_all;
 use crate::sampling::{dim_bsdf, dim_connection, dim_light, dim_merge, Sampler, DIM_CAMERA};
 use crate::subpath::{
     density_vanishes, merge_camera_share, merge_light_share, merge_survival, shadow_survival,
@@ -123,45 +124,47 @@ impl PhotonRecord {
 }
 
 impl CameraPass<'_> {
-    /// Whether surface points `a` and `b` (error bounds, unit normals) see each other, after
-    /// Russian roulette on the ray by `value`, the contribution it would bring (drawing `u`):
-    /// the factor to multiply the contribution by, 1 / q where the ray was traced and found
-    /// clear, else 0.
+    /// Adds `value` times whether surface points `a` and `b` (error bounds, unit normals) see
+    /// each other, after Russian roulette on the ray by `value`, the contribution it would
+    /// bring (drawing `u`): the factor is 1 / q where the ray is traced and found clear, else
+    /// 0. The ray waits in `terms` to be traced with the others of the tile
+    /// ([`CameraTerms::sum`]).
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn visibility(
         &self,
+        terms: &mut CameraTerms,
         a: (Vec3, Vec3, Vec3),
         b: (Vec3, Vec3, Vec3),
         value: Vec3,
         u: f32,
         rays: &mut u64,
-    ) -> f32 {
+    ) {
         let q = shadow_survival(value, self.shadow_threshold);
         if u >= q {
-            return 0.0;
+            terms.add(value, 0.0);
+            return;
         }
         let to_b = b.0 - a.0;
         let origin = offset_ray_origin(a.0, a.1, a.2, to_b);
         let end = offset_ray_origin(b.0, b.1, b.2, -to_b);
         *rays += 1;
-        if occluded(
-            self.scene,
-            &Ray {
+        terms.add_if_clear(
+            value,
+            1.0 / q,
+            Ray {
                 o: origin,
                 d: end - origin,
             },
-            1.0,
-        ) {
-            0.0
-        } else {
-            1.0 / q
-        }
+        );
     }
 
     /// The radiance that one camera subpath of pixel (x, y) gathers by the strategies with
     /// t ≥ 2, connecting to `light_path`, the light subpath of the same pixel and iteration;
-    /// the pixel traces `camera_subpaths` (n_c) of them. `rays` counts the rays traced.
+    /// the pixel traces `camera_subpaths` (n_c) of them. Its terms go to `terms`, in order,
+    /// as one subpath ([`CameraTerms::end_subpath`]); their sum is the radiance. `rays` counts
+    /// the rays traced, the pending visibility rays included.
+    #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
         x: u32,
@@ -169,8 +172,9 @@ impl CameraPass<'_> {
         camera_subpaths: u32,
         sampler: &Sampler,
         light_path: &[LightVertex],
+        terms: &mut CameraTerms,
         rays: &mut u64,
-    ) -> Vec3 {
+    ) {
         let (scene, camera, faults) = (self.scene, self.camera, self.faults);
         let n_paths = self.n_light_paths as f32;
         let max_edges = max_path_edges(&faults);
@@ -184,7 +188,6 @@ impl CameraPass<'_> {
             camera_subpaths as f32 * camera.importance(cos_camera),
         );
 
-        let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
         // Product of etap² over refractions, for Russian roulette (as in path.rs).
         let mut eta_scale = 1.0f32;
@@ -218,7 +221,7 @@ impl CameraPass<'_> {
                 } else {
                     1.0
                 };
-                radiance += throughput * Vec3::from(material.emission) * w;
+                terms.add(throughput * Vec3::from(material.emission) * w, 1.0);
             }
 
             let u_light = sampler.draw4(dim_light(bounce));
@@ -277,7 +280,7 @@ impl CameraPass<'_> {
                     );
                     let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                     let light = (ls.p, ls.p_err, ls.n);
-                    radiance += value * self.visibility(here, light, value, u_bsdf[3], rays);
+                    self.visibility(terms, here, light, value, u_bsdf[3], rays);
                 }
 
                 if let Some((photons, query, _)) = &merging {
@@ -324,7 +327,7 @@ impl CameraPass<'_> {
                         * (g * w);
                     let there = (lp, Vec3::splat(v.p_err), Vec3::from(v.n));
                     let u = sampler.draw4(dim_connection(bounce, i as u32))[i % 4];
-                    radiance += value * self.visibility(here, there, value, u, rays);
+                    self.visibility(terms, here, there, value, u, rays);
                 }
 
                 // Step 6 - merging (VCM, SPPM): every photon of the iteration within r on the
@@ -350,8 +353,10 @@ impl CameraPass<'_> {
                         gathered += Vec3::from(v.throughput) * w;
                     });
                     let q = if faults.merge_rr_undivided { 1.0 } else { *q };
-                    radiance +=
-                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization / q);
+                    terms.add(
+                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization / q),
+                        1.0,
+                    );
                     if !self.connects {
                         // SPPM merges at the first diffuse vertex only.
                         break;
@@ -391,7 +396,71 @@ impl CameraPass<'_> {
             }
             bounce += 1;
         }
-        radiance
+        terms.end_subpath();
+    }
+}
+
+/// The terms of a tile's camera subpaths, in the order each subpath adds them, with their
+/// visibility rays: the CPU traces a tile's visibility rays together, eight at a time in SIMD
+/// lanes (`packet::occluded_all`), and then sums each subpath's terms in its own order, so
+/// the sum is bit for bit that of tracing each ray at once, as `shaders/bdpt.wgsl` does. A
+/// term is value x factor, the factor 0 where its ray is blocked; terms without a ray (the
+/// emission, the merges, a ray that roulette did not trace) keep their factor (1, or 0).
+#[derive(Default)]
+pub struct CameraTerms {
+    /// (value, factor, index of the ray in `rays` or `NO_RAY`).
+    terms: Vec<(Vec3, f32, u32)>,
+    rays: Vec<Ray>,
+    blocked: Vec<bool>,
+    /// Where each subpath's terms end.
+    ends: Vec<usize>,
+}
+
+const NO_RAY: u32 = u32::MAX;
+
+impl CameraTerms {
+    /// Empties it for the next tile, keeping the storage.
+    pub fn clear(&mut self) {
+        self.terms.clear();
+        self.rays.clear();
+        self.ends.clear();
+    }
+
+    #[inline]
+    fn add(&mut self, value: Vec3, factor: f32) {
+        self.terms.push((value, factor, NO_RAY));
+    }
+
+    #[inline]
+    fn add_if_clear(&mut self, value: Vec3, factor: f32, ray: Ray) {
+        self.terms.push((value, factor, self.rays.len() as u32));
+        self.rays.push(ray);
+    }
+
+    #[inline]
+    fn end_subpath(&mut self) {
+        self.ends.push(self.terms.len());
+    }
+
+    /// Traces the visibility rays and returns each subpath's radiance, in the order the
+    /// subpaths were traced.
+    pub fn sum(&mut self, scene: &FlatScene) -> Vec<Vec3> {
+        self.blocked.clear();
+        self.blocked.resize(self.rays.len(), false);
+        occluded_all(scene, &self.rays, &mut self.blocked);
+        let mut start = 0;
+        self.ends
+            .iter()
+            .map(|&end| {
+                let mut radiance = Vec3::ZERO;
+                for &(value, factor, ray) in &self.terms[start..end] {
+                    let clear = ray == NO_RAY || !self.blocked[ray as usize];
+                    radiance += value * if clear { factor } else { 0.0 };
+                }
+                start = end;
+                radiance
+            })
+            .collect()
     }
 }
 

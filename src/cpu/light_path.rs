@@ -21,12 +21,13 @@
 //! (Veach's thesis, section 10.2; pbrt-v4's `ConnectBDPT` with t = 1).
 
 use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
-use crate::bvh::{intersect_closest, occluded};
+use crate::bvh::intersect_closest;
 use crate::camera::{Camera, Raster};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
+use crate::packet::occluded_all;
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
@@ -71,6 +72,42 @@ pub struct LightPass<'a> {
     pub merge: MergeMis,
 }
 
+/// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU
+/// traces a chunk's splat rays together, eight at a time in SIMD lanes
+/// ([`crate::packet::occluded_all`]: the rays of a chunk all end at the eye), and splats the
+/// visible ones ([`add_splats`]). Splat sums do not depend on their order (`crate::splat`), so
+/// the image is bit for bit that of splatting each at once, as `shaders/light_path.wgsl` does.
+#[derive(Clone, Copy, Debug)]
+pub struct PendingSplat {
+    pub pixel: u32,
+    /// The splat's value, already divided by its roulette's survival probability.
+    pub value: Vec3,
+    /// The visibility segment, from the offset surface point to the eye (t in (0, 1)).
+    pub ray: Ray,
+}
+
+/// Traces the visibility rays of `pending` and adds each splat whose eye is visible into
+/// `splats`; `rays` and `blocked` are scratch space. Leaves `pending` empty.
+pub fn add_splats(
+    scene: &FlatScene,
+    pending: &mut Vec<PendingSplat>,
+    splats: &Splats,
+    rays: &mut Vec<Ray>,
+    blocked: &mut Vec<bool>,
+) {
+    rays.clear();
+    rays.extend(pending.iter().map(|p| p.ray));
+    blocked.clear();
+    blocked.resize(rays.len(), false);
+    occluded_all(scene, rays, blocked);
+    for (p, &b) in pending.iter().zip(blocked.iter()) {
+        if !b {
+            splats.add(p.pixel as usize, p.value);
+        }
+    }
+    pending.clear();
+}
+
 /// The longest full path (in edges) that the `max_bounces` fault lets through: the camera ray,
 /// that many bounces and the connection.
 #[inline]
@@ -92,12 +129,13 @@ impl LightPass<'_> {
 
     /// Splats `value` into `pixel` if the surface point `p` (error bound `p_err`, normal `n`)
     /// sees the eye, tracing the visibility ray with probability `shadow_survival` of the
-    /// value (drawing `u`) and dividing by it. Returns the rays traced.
+    /// value (drawing `u`) and dividing by it. The ray waits in `pending` to be traced with
+    /// the others of its chunk ([`add_splats`]). Returns the rays it will trace.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn splat(
         &self,
-        splats: &Splats,
+        pending: &mut Vec<PendingSplat>,
         pixel: usize,
         p: Vec3,
         p_err: Vec3,
@@ -111,27 +149,26 @@ impl LightPass<'_> {
         }
         let eye = Vec3::from(self.camera.eye);
         let origin = offset_ray_origin(p, p_err, n, eye - p);
-        if !occluded(
-            self.scene,
-            &Ray {
+        pending.push(PendingSplat {
+            pixel: pixel as u32,
+            value: value / q,
+            ray: Ray {
                 o: origin,
                 d: eye - origin,
             },
-            1.0,
-        ) {
-            splats.add(pixel, value / q);
-        }
+        });
         1
     }
 
-    /// Traces light subpath `path` of `sampler`: splats its connections to the camera into
-    /// `splats` (not for SPPM) and, but for light tracing, appends its diffuse vertices to
-    /// `vertices`, in order. Returns the number of rays traced.
+    /// Traces light subpath `path` of `sampler`: appends its connections to the camera to
+    /// `pending`, for [`add_splats`] to splat where the eye is visible (not for SPPM), and, but
+    /// for light tracing, appends its diffuse vertices to `vertices`, in order. Returns the
+    /// number of rays traced, the pending splats' included.
     pub fn trace(
         &self,
         path: u32,
         sampler: &Sampler,
-        splats: &Splats,
+        pending: &mut Vec<PendingSplat>,
         vertices: &mut Vec<LightVertex>,
     ) -> u64 {
         let scene = self.scene;
@@ -175,7 +212,7 @@ impl LightPass<'_> {
                 };
                 let value = light.le / light.pdf_area * (g_camera * w / n_paths);
                 let u = sampler.draw4(DIM_EMISSION)[3];
-                rays += self.splat(splats, pixel, light.p, light.p_err, light.n, value, u);
+                rays += self.splat(pending, pixel, light.p, light.p_err, light.n, value, u);
             }
         }
 
@@ -258,7 +295,7 @@ impl LightPass<'_> {
                         };
                         let value = throughput * bsdf.f * (g_camera * w / n_paths);
                         let u = sampler.draw4(dim_splat(bounce))[0];
-                        rays += self.splat(splats, pixel, hit.p, hit.p_err, hit.n, value, u);
+                        rays += self.splat(pending, pixel, hit.p, hit.p_err, hit.n, value, u);
                     }
                 }
             }

@@ -134,8 +134,7 @@ impl LightPassBuffers {
             radius,
             camera_subpaths: if bdpt {
                 crate::subpath::camera_subpaths(
-                    scene,
-                    camera,
+                    &crate::subpath::specular_pixels(scene, camera),
                     crate::subpath::specular_camera_subpaths(method, radius.initial),
                 )
             } else {
@@ -206,11 +205,20 @@ pub fn render_iterations(
                 let mut vertices = Vec::new();
                 let mut ends = Vec::with_capacity(LIGHT_CHUNK as usize);
                 let mut rays = 0;
+                let mut pending = Vec::new();
                 for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
-                    rays +=
-                        pass.trace(i, &Sampler::new(seed, i, s), &buffers.splats, &mut vertices);
+                    rays += pass.trace(i, &Sampler::new(seed, i, s), &mut pending, &mut vertices);
                     ends.push(vertices.len() as u32);
                 }
+                // The chunk's splats, their visibility rays in packets.
+                let (mut shadow_rays, mut blocked) = (Vec::new(), Vec::new());
+                light_path::add_splats(
+                    scene,
+                    &mut pending,
+                    &buffers.splats,
+                    &mut shadow_rays,
+                    &mut blocked,
+                );
                 (vertices, ends, rays)
             })
             .collect();
@@ -260,31 +268,49 @@ pub fn render_iterations(
         let tiles_x = w.div_ceil(TILE);
         let results: Vec<TileValues> = (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
-            .map(|t| {
+            .map_init(bdpt::CameraTerms::default, |terms, t| {
                 let (tx, ty) = (t % tiles_x, t / tiles_x);
-                let mut out = Vec::with_capacity((TILE * TILE) as usize);
                 let mut rays = 0;
+                // The tile's camera subpaths, their visibility rays traced together at the end.
+                terms.clear();
+                let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
                 for y in ty * TILE..((ty + 1) * TILE).min(h) {
                     for x in tx * TILE..((tx + 1) * TILE).min(w) {
                         let index = (y * w + x) as usize;
-                        let mut value = glam::Vec3::ZERO;
-                        if method != Method::Light {
-                            // The pixel's n_c camera subpaths, averaged; the k-th draws the
-                            // streams of pixel index + k · N (a camera subpath's own blocks
-                            // there: light subpaths stop at N).
+                        let n_c = if method != Method::Light {
+                            // The pixel's n_c camera subpaths; the k-th draws the streams of
+                            // pixel index + k · N (a camera subpath's own blocks there: light
+                            // subpaths stop at N).
                             let (a, b) = (buffers.starts[index], buffers.starts[index + 1]);
                             let light_path = &buffers.vertices[a as usize..b as usize];
                             let n_c = buffers.camera_subpaths[index];
                             for k in 0..n_c {
                                 let sampler = Sampler::new(seed, index as u32 + k * n_paths, s);
-                                value +=
-                                    camera_pass.trace(x, y, n_c, &sampler, light_path, &mut rays);
+                                camera_pass
+                                    .trace(x, y, n_c, &sampler, light_path, terms, &mut rays);
+                            }
+                            n_c
+                        } else {
+                            0
+                        };
+                        pixels.push((index, n_c));
+                    }
+                }
+                // Each pixel's subpaths averaged, plus its splats.
+                let mut radiance = terms.sum(scene).into_iter();
+                let out = pixels
+                    .into_iter()
+                    .map(|(index, n_c)| {
+                        let mut value = glam::Vec3::ZERO;
+                        if n_c > 0 {
+                            for r in radiance.by_ref().take(n_c as usize) {
+                                value += r;
                             }
                             value /= n_c as f32;
                         }
-                        out.push((index, buffers.splats.take(index).map(|splat| value + splat)));
-                    }
-                }
+                        (index, buffers.splats.take(index).map(|splat| value + splat))
+                    })
+                    .collect();
                 (out, rays)
             })
             .collect();

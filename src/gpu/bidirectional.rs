@@ -112,14 +112,6 @@ pub struct Bidirectional {
     camera_subpaths: Vec<u32>,
 }
 
-/// n_c per pixel: `count` in the `specular` pixels, 1 elsewhere (`subpath::camera_subpaths`).
-fn camera_subpath_counts(specular: &[bool], count: u32) -> Vec<u32> {
-    specular
-        .iter()
-        .map(|&s| if s { count } else { 1 })
-        .collect()
-}
-
 /// The camera radiance buffer's lanes at the start of an iteration, (0, 0, 0, n_c), per pixel.
 fn camera_radiance_lanes(camera_subpaths: &[u32]) -> Vec<[f32; 4]> {
     camera_subpaths
@@ -252,7 +244,7 @@ impl Bidirectional {
             Method::Light => vec![false; pixels as usize],
             _ => crate::subpath::specular_pixels(scene, camera),
         };
-        let camera_subpaths = camera_subpath_counts(
+        let camera_subpaths = crate::subpath::camera_subpaths(
             &specular,
             crate::subpath::specular_camera_subpaths(
                 method,
@@ -439,7 +431,7 @@ impl GpuRenderer {
         }
         if method != Method::Light {
             let count = crate::subpath::specular_camera_subpaths(method, radius.initial);
-            b.camera_subpaths = camera_subpath_counts(&b.specular, count);
+            b.camera_subpaths = crate::subpath::camera_subpaths(&b.specular, count);
             b.n_c = camera_radiance_lanes(&b.camera_subpaths);
             let band = b.band_pixels as usize;
             self.queue
