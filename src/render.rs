@@ -142,18 +142,14 @@ pub fn available_memory() -> Option<u64> {
 /// how many pixels trace several camera subpaths per iteration.
 pub fn bidirectional_provenance(
     shadow_threshold: f32,
-    camera_subpaths: &[u32],
+    specular_camera_subpaths: u32,
+    specular_pixels: usize,
 ) -> Vec<(&'static str, String)> {
-    let more = camera_subpaths.iter().filter(|&&n| n > 1);
     vec![
         ("shadow_rr_threshold", format!("{shadow_threshold:e}")),
         (
             "specular_camera_subpaths",
-            format!(
-                "{} in {} pixels",
-                more.clone().max().copied().unwrap_or(1),
-                more.count()
-            ),
+            format!("{specular_camera_subpaths} in {specular_pixels} pixels"),
         ),
     ]
 }
@@ -230,9 +226,11 @@ impl Backend for CpuBackend<'_> {
     }
     fn provenance(&self) -> Vec<(&'static str, String)> {
         let mut out = match &self.buffers {
-            Some(b) if self.method.connects() => {
-                bidirectional_provenance(b.shadow_threshold, &b.camera_subpaths)
-            }
+            Some(b) if self.method.connects() => bidirectional_provenance(
+                b.shadow_threshold,
+                crate::subpath::specular_camera_subpaths(self.method, b.radius.initial),
+                b.camera_subpaths.iter().filter(|&&n| n > 1).count(),
+            ),
             _ => Vec::new(),
         };
         if let (Some(b), true) = (&self.buffers, self.method.merges()) {

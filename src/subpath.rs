@@ -44,7 +44,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 /// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass,
-/// for BDPT and SPPM (and VCM without merging, which is BDPT). There the camera subpath is all
+/// for BDPT (and VCM without merging, which is BDPT) and for SPPM (not measured for SPPM, whose
+/// camera subpaths are cheap: they end at their first diffuse vertex). There the camera subpath is all
 /// BDPT has: light tracing cannot reach the pixel, and what is seen in the mirror (a wall lit
 /// through the mirror: camera - mirror - diffuse - mirror - light) is found by the camera
 /// subpath alone, as in path tracing. With one camera subpath per iteration those pixels would
@@ -82,7 +83,7 @@ pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 pub const SPECULAR_CAMERA_SUBPATHS_MERGING: u32 = 2;
 
 /// n_c where a pixel's centre ray first meets a mirror or glass, for `method` with the initial
-/// merge radius `radius` (0 where the method does not merge): VCM that merges takes
+/// merge radius `radius` (looked at only for VCM): VCM that merges takes
 /// [`SPECULAR_CAMERA_SUBPATHS_MERGING`], every other method [`SPECULAR_CAMERA_SUBPATHS`], so
 /// VCM with the radius 0 is BDPT in this too.
 pub fn specular_camera_subpaths(method: Method, radius: f32) -> u32 {

@@ -128,7 +128,7 @@ impl CameraPass<'_> {
     /// each other, after Russian roulette on the ray by `value`, the contribution it would
     /// bring (drawing `u`): the factor is 1 / q where the ray is traced and found clear, else
     /// 0. The ray waits in `terms` to be traced with the others of the tile
-    /// ([`CameraTerms::sum`]).
+    /// ([`CameraTerms::sum_into`]).
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn visibility(
@@ -419,11 +419,13 @@ pub struct CameraTerms {
 const NO_RAY: u32 = u32::MAX;
 
 impl CameraTerms {
-    /// Empties it for the next tile, keeping the storage.
-    pub fn clear(&mut self) {
-        self.terms.clear();
-        self.rays.clear();
-        self.ends.clear();
+    /// Visibility rays past which a tile's terms are summed before it takes the next pixel,
+    /// so that a tile of long subpaths holds bounded memory (the sums are the same).
+    pub const RAYS_BEFORE_SUM: usize = 4096;
+
+    /// The visibility rays waiting to be traced.
+    pub fn pending_rays(&self) -> usize {
+        self.rays.len()
     }
 
     #[inline]
@@ -442,25 +444,26 @@ impl CameraTerms {
         self.ends.push(self.terms.len());
     }
 
-    /// Traces the visibility rays and returns each subpath's radiance, in the order the
-    /// subpaths were traced.
-    pub fn sum(&mut self, scene: &FlatScene) -> Vec<Vec3> {
+    /// Traces the visibility rays, appends each subpath's radiance to `radiance` in the order
+    /// the subpaths were traced, and empties itself, keeping the storage.
+    pub fn sum_into(&mut self, scene: &FlatScene, radiance: &mut Vec<Vec3>) {
         self.blocked.clear();
         self.blocked.resize(self.rays.len(), false);
         occluded_all(scene, &self.rays, &mut self.blocked);
         let mut start = 0;
-        self.ends
-            .iter()
-            .map(|&end| {
-                let mut radiance = Vec3::ZERO;
-                for &(value, factor, ray) in &self.terms[start..end] {
-                    let clear = ray == NO_RAY || !self.blocked[ray as usize];
-                    radiance += value * if clear { factor } else { 0.0 };
-                }
-                start = end;
-                radiance
-            })
-            .collect()
+        for &end in &self.ends {
+            let mut sum = Vec3::ZERO;
+            for &(value, factor, ray) in &self.terms[start..end] {
+                let clear = ray == NO_RAY || !self.blocked[ray as usize];
+                sum += value * if clear { factor } else { 0.0 };
+            }
+            start = end;
+            radiance.push(sum);
+        }
+        debug_assert_eq!(start, self.terms.len(), "terms after the last subpath");
+        self.terms.clear();
+        self.rays.clear();
+        self.ends.clear();
     }
 }
 

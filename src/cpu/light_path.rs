@@ -87,25 +87,16 @@ pub struct PendingSplat {
 }
 
 /// Traces the visibility rays of `pending` and adds each splat whose eye is visible into
-/// `splats`; `rays` and `blocked` are scratch space. Leaves `pending` empty.
-pub fn add_splats(
-    scene: &FlatScene,
-    pending: &mut Vec<PendingSplat>,
-    splats: &Splats,
-    rays: &mut Vec<Ray>,
-    blocked: &mut Vec<bool>,
-) {
-    rays.clear();
-    rays.extend(pending.iter().map(|p| p.ray));
-    blocked.clear();
-    blocked.resize(rays.len(), false);
-    occluded_all(scene, rays, blocked);
-    for (p, &b) in pending.iter().zip(blocked.iter()) {
+/// `splats`.
+pub fn add_splats(scene: &FlatScene, pending: &[PendingSplat], splats: &Splats) {
+    let rays: Vec<Ray> = pending.iter().map(|p| p.ray).collect();
+    let mut blocked = vec![false; rays.len()];
+    occluded_all(scene, &rays, &mut blocked);
+    for (p, &b) in pending.iter().zip(&blocked) {
         if !b {
             splats.add(p.pixel as usize, p.value);
         }
     }
-    pending.clear();
 }
 
 /// The longest full path (in edges) that the `max_bounces` fault lets through: the camera ray,

@@ -151,8 +151,8 @@ impl LightPassBuffers {
 
 /// Adds iterations `first..first + count` of light tracing, BDPT, SPPM or VCM to `film`. Each
 /// iteration traces one light subpath per pixel (light pass, splatting into `buffers.splats`),
-/// builds the hash grid of their vertices (merging, with iteration i's radius), then one
-/// camera subpath per pixel (not for light tracing) that connects to the light subpath of the
+/// builds the hash grid of their vertices (merging, with iteration i's radius), then n_c
+/// camera subpaths per pixel (`subpath::camera_subpaths`; not for light tracing) that connects to the light subpath of the
 /// same index and merges with every pixel's; each pixel's value for the iteration, its camera
 /// subpath's radiance plus the splats it received, is one sample of that pixel, and the
 /// iteration's image mean one sample of the image mean (batch means, `film.rs`). Splat sums do
@@ -211,14 +211,7 @@ pub fn render_iterations(
                     ends.push(vertices.len() as u32);
                 }
                 // The chunk's splats, their visibility rays in packets.
-                let (mut shadow_rays, mut blocked) = (Vec::new(), Vec::new());
-                light_path::add_splats(
-                    scene,
-                    &mut pending,
-                    &buffers.splats,
-                    &mut shadow_rays,
-                    &mut blocked,
-                );
+                light_path::add_splats(scene, &pending, &buffers.splats);
                 (vertices, ends, rays)
             })
             .collect();
@@ -271,16 +264,17 @@ pub fn render_iterations(
             .map_init(bdpt::CameraTerms::default, |terms, t| {
                 let (tx, ty) = (t % tiles_x, t / tiles_x);
                 let mut rays = 0;
-                // The tile's camera subpaths, their visibility rays traced together at the end.
-                terms.clear();
+                // The tile's camera subpaths, their visibility rays traced together (at the end,
+                // or sooner where they pile up) and each subpath's radiance in order.
                 let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
+                let mut radiance = Vec::new();
                 for y in ty * TILE..((ty + 1) * TILE).min(h) {
                     for x in tx * TILE..((tx + 1) * TILE).min(w) {
                         let index = (y * w + x) as usize;
                         let n_c = if method != Method::Light {
-                            // The pixel's n_c camera subpaths; the k-th draws the streams of
-                            // pixel index + k · N (a camera subpath's own blocks there: light
-                            // subpaths stop at N).
+                            // The pixel's n_c camera subpaths, averaged; the k-th draws the
+                            // streams of pixel index + k · N (a camera subpath's own blocks
+                            // there: light subpaths stop at N).
                             let (a, b) = (buffers.starts[index], buffers.starts[index + 1]);
                             let light_path = &buffers.vertices[a as usize..b as usize];
                             let n_c = buffers.camera_subpaths[index];
@@ -294,10 +288,14 @@ pub fn render_iterations(
                             0
                         };
                         pixels.push((index, n_c));
+                        if terms.pending_rays() >= bdpt::CameraTerms::RAYS_BEFORE_SUM {
+                            terms.sum_into(scene, &mut radiance);
+                        }
                     }
                 }
+                terms.sum_into(scene, &mut radiance);
                 // Each pixel's subpaths averaged, plus its splats.
-                let mut radiance = terms.sum(scene).into_iter();
+                let mut radiance = radiance.into_iter();
                 let out = pixels
                     .into_iter()
                     .map(|(index, n_c)| {
@@ -311,6 +309,7 @@ pub fn render_iterations(
                         (index, buffers.splats.take(index).map(|splat| value + splat))
                     })
                     .collect();
+                debug_assert!(radiance.next().is_none(), "a subpath's radiance left over");
                 (out, rays)
             })
             .collect();

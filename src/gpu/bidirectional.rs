@@ -108,8 +108,8 @@ pub struct Bidirectional {
     pub retraced: u64,
     /// The pixels whose centre ray meets a mirror or glass (`subpath::specular_pixels`).
     specular: Vec<bool>,
-    /// n_c per pixel (for the provenance).
-    camera_subpaths: Vec<u32>,
+    /// n_c in those pixels (`subpath::specular_camera_subpaths`).
+    specular_camera_subpaths: u32,
 }
 
 /// The camera radiance buffer's lanes at the start of an iteration, (0, 0, 0, n_c), per pixel.
@@ -244,14 +244,14 @@ impl Bidirectional {
             Method::Light => vec![false; pixels as usize],
             _ => crate::subpath::specular_pixels(scene, camera),
         };
-        let camera_subpaths = crate::subpath::camera_subpaths(
-            &specular,
-            crate::subpath::specular_camera_subpaths(
-                method,
-                MergeRadius::default_for(scene).initial,
-            ),
+        let specular_camera_subpaths = crate::subpath::specular_camera_subpaths(
+            method,
+            MergeRadius::default_for(scene).initial,
         );
-        let n_c = camera_radiance_lanes(&camera_subpaths);
+        let n_c = camera_radiance_lanes(&crate::subpath::camera_subpaths(
+            &specular,
+            specular_camera_subpaths,
+        ));
         let camera_radiance = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera radiance"),
             contents: bytemuck::cast_slice(&n_c[..band_pixels as usize]),
@@ -315,7 +315,7 @@ impl Bidirectional {
             vertices_per_path: FIRST_VERTICES_PER_PATH,
             retraced: 0,
             specular,
-            camera_subpaths,
+            specular_camera_subpaths,
         })
     }
 }
@@ -358,7 +358,8 @@ impl GpuRenderer {
                 let mut v = if self.method.connects() {
                     crate::render::bidirectional_provenance(
                         self.frame.shadow_threshold,
-                        &b.camera_subpaths,
+                        b.specular_camera_subpaths,
+                        b.specular.iter().filter(|&&s| s).count(),
                     )
                 } else {
                     Vec::new()
@@ -431,8 +432,8 @@ impl GpuRenderer {
         }
         if method != Method::Light {
             let count = crate::subpath::specular_camera_subpaths(method, radius.initial);
-            b.camera_subpaths = crate::subpath::camera_subpaths(&b.specular, count);
-            b.n_c = camera_radiance_lanes(&b.camera_subpaths);
+            b.specular_camera_subpaths = count;
+            b.n_c = camera_radiance_lanes(&crate::subpath::camera_subpaths(&b.specular, count));
             let band = b.band_pixels as usize;
             self.queue
                 .write_buffer(&b.camera_radiance, 0, bytemuck::cast_slice(&b.n_c[..band]));
