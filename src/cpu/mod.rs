@@ -152,12 +152,12 @@ impl LightPassBuffers {
 /// Adds iterations `first..first + count` of light tracing, BDPT, SPPM or VCM to `film`. Each
 /// iteration traces one light subpath per pixel (light pass, splatting into `buffers.splats`),
 /// builds the hash grid of their vertices (merging, with iteration i's radius), then n_c
-/// camera subpaths per pixel (`subpath::camera_subpaths`; not for light tracing) that connects to the light subpath of the
-/// same index and merges with every pixel's; each pixel's value for the iteration, its camera
-/// subpath's radiance plus the splats it received, is one sample of that pixel, and the
-/// iteration's image mean one sample of the image mean (batch means, `film.rs`). Splat sums do
-/// not depend on thread order, so images are bit-identical for any thread count. Returns the
-/// number of rays traced.
+/// camera subpaths per pixel (`subpath::camera_subpaths`; not for light tracing) that connect
+/// to the light subpath of the same index and merge with every pixel's; each pixel's value for
+/// the iteration, the mean of its camera subpaths' radiance plus the splats it received, is one
+/// sample of that pixel, and the iteration's image mean one sample of the image mean (batch
+/// means, `film.rs`). Splat sums do not depend on thread order, so images are bit-identical for
+/// any thread count. Returns the number of rays traced.
 #[allow(clippy::too_many_arguments)]
 pub fn render_iterations(
     scene: &FlatScene,
