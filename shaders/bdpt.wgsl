@@ -53,6 +53,12 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
     // Product of etap^2 over refractions, for Russian roulette (as in path.wgsl).
     var eta_scale = 1.0;
     var bounce = 0u;
+    // Next-event estimation through planar mirrors (BDPT, VCM): whether the vertex before this
+    // one was diffuse, and whether this one was reached from a diffuse vertex by way of a planar
+    // mirror (planar_mirror.wgsl: such emission is that strategy's alone).
+    let through_mirrors = connects() && frame.planar_mirror_count > 0u;
+    var previous_diffuse = false;
+    var by_a_mirror = false;
 
     loop {
         // Step 2 - closest hit; the quantities turn the direction's density into an area
@@ -75,8 +81,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
 
         // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
         // light point taken by next-event estimation or by a light subpath (SPPM meets it
-        // only through mirrors and glass, where nothing else can: weight 1).
-        if own && material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
+        // only through mirrors and glass, where nothing else can: weight 1). Seen from a
+        // diffuse vertex in a planar mirror, it is next-event estimation's (step 4b).
+        if own && material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges && !by_a_mirror {
             let pdf_area = emitter_pdf_area(hit.prim);
             var w = 1.0;
             if connects() {
@@ -112,6 +119,53 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                 let w = weight_next_event(m, iteration_merge(), bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
                 let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                 radiance += value * visibility(hit.p, hit.p_err, hit.n, ls.p, ls.p_err, ls.n, value, u_bsdf.w);
+            }
+
+            // Step 4b - next-event estimation through each planar mirror: the same emitter
+            // point, reflected in the mirror's plane, is a light of the same area density; the
+            // path x -> m -> y has the image's geometry term and the mirror's reflectance, and
+            // weight 1 (planar_mirror.wgsl). A closest-hit ray finds m on the mirror with x m
+            // clear, a shadow ray m y.
+            if own && through_mirrors && depth + 1u < max_edges {
+                let u_mirror = draw4(sampler, dim_mirror(bounce));
+                for (var i = 0u; i < frame.planar_mirror_count; i++) {
+                    let mirror = frame.planar_mirrors[i];
+                    let im = image(mirror, hit.p, ls.p, ls.n);
+                    if !im.found {
+                        continue;
+                    }
+                    let to_image = im.y_image - hit.p;
+                    let dist2 = dot(to_image, to_image);
+                    let wi = to_image / sqrt(dist2);
+                    let cos_l = -dot(im.n_image, wi);
+                    let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
+                    if bsdf.pdf <= 0.0 || cos_l <= 0.0 || dist2 <= 0.0 {
+                        continue;
+                    }
+                    // The mirror's reflectance (a specular bounce: the test-only specular_scale
+                    // too).
+                    let reflectance = materials[mirror.material].color * frame.specular_scale;
+                    let value = throughput * bsdf.f * reflectance * ls.le * (bsdf.cos_i * cos_l / (dist2 * ls.pdf_area));
+                    let q = shadow_survival(value, frame.shadow_threshold);
+                    if u_mirror[i] >= q {
+                        continue;
+                    }
+                    let to_mirror = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, wi), wi);
+                    let candidate = traverse(to_mirror, F32_MAX, false);
+                    if !candidate.found {
+                        continue;
+                    }
+                    let mh = surface_hit(to_mirror, candidate);
+                    if planar_mirror_of(mh.prim) != i {
+                        continue;
+                    }
+                    let to_b = ls.p - mh.p;
+                    let origin = offset_ray_origin(mh.p, mh.p_err, mh.n, to_b);
+                    let end = offset_ray_origin(ls.p, ls.p_err, ls.n, -to_b);
+                    if !occluded(Ray(origin, end - origin), 1.0) {
+                        radiance += value * (1.0 / q);
+                    }
+                }
             }
 
             // Step 5 - connections (s >= 2): to each vertex of this pixel's light subpath, one
@@ -216,6 +270,8 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
         if max_element(throughput) <= 0.0 || depth >= max_edges {
             break;
         }
+        by_a_mirror = through_mirrors && previous_diffuse && material.kind == KIND_MIRROR && planar_mirror_of(hit.prim) != NO_PLANAR_MIRROR;
+        previous_diffuse = diffuse;
         ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
 
         // Step 8 - Russian roulette, as in path.wgsl: from bounce RR_START_BOUNCE on, continue

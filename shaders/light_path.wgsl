@@ -114,6 +114,11 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     var m = mis_light(light.pdf_area, emission.pdf_dir, emission.cos, iteration_merge());
     var ray = Ray(offset_ray_origin(light.p, light.p_err, light.n, emission.dir), emission.dir);
     var bounce = 0u;
+    // Next-event estimation through planar mirrors takes the paths whose light end is the light
+    // point, a planar mirror and a diffuse vertex (BDPT, VCM; planar_mirror.wgsl): the primitive
+    // of this subpath's first hit tells.
+    let through_mirrors = (frame.method == METHOD_BDPT || frame.method == METHOD_VCM) && frame.planar_mirror_count > 0u;
+    var first_prim = PRIM_PADDING;
 
     loop {
         // Step 3 - closest hit; the quantities turn the direction's density into an area
@@ -139,6 +144,14 @@ fn trace_light_path(sampler: Sampler, path: u32) {
         let diffuse = is_diffuse(material);
         if material.kind == KIND_EMITTER && !diffuse {
             // A black emitter absorbs.
+            break;
+        }
+        if length == 1u {
+            first_prim = hit.prim;
+        } else if length == 2u && through_mirrors && starts_by_a_mirror(first_prim, diffuse) {
+            // The light came to this diffuse vertex from a planar mirror: every path through it
+            // is next-event estimation's through the mirror (weight 1), so the subpath stores
+            // and splats nothing more.
             break;
         }
         if diffuse {

@@ -55,6 +55,12 @@ fn dim_merge(bounce: u32) -> u32 {
     return 0x58000000u + bounce;
 }
 
+// BDPT's and VCM's Russian roulette on the visibility ray of next-event estimation through planar
+// mirror i at camera bounce `bounce` (lane i; planar_mirror.wgsl).
+fn dim_mirror(bounce: u32) -> u32 {
+    return 0x5C000000u + bounce;
+}
+
 // Light subpath bounce k: Russian roulette on the splat's visibility ray (lane 0).
 fn dim_splat(bounce: u32) -> u32 {
     return 0x50000000u + bounce;

@@ -63,6 +63,19 @@ struct Camera {
     pad1: u32,
 }
 
+// A planar mirror (planar_mirror.wgsl): the plane n . p = d of a set of mirror triangles of one
+// material, their bounds, and how far from the plane a vertex of theirs may lie.
+struct PlanarMirror {
+    n: vec3<f32>,
+    d: f32,
+    lo: vec3<f32>,
+    tolerance: f32,
+    hi: vec3<f32>,
+    material: u32,
+}
+
+const MAX_PLANAR_MIRRORS: u32 = 4u;
+
 // One dispatch: which pixels (a tile), which samples, and the test-only faults.
 struct Frame {
     camera: Camera,
@@ -111,7 +124,11 @@ struct Frame {
     merge_rr_threshold: f32,
     // Test-only: merge queries rouletted but not divided by their probability, 0 or 1.
     merge_rr_undivided: u32,
-    pad: vec2<u32>,
+    // How many of planar_mirrors the scene has.
+    planar_mirror_count: u32,
+    pad: u32,
+    // The scene's planar mirrors, for next-event estimation through them (BDPT, VCM).
+    planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }
 
 const METHOD_PATH: u32 = 0u;
@@ -134,6 +151,8 @@ const KIND_GLASS: u32 = 2u;
 const KIND_EMITTER: u32 = 3u;
 const NOT_AN_EMITTER: u32 = 0xffffffffu;
 const PRIM_SPHERE_BIT: u32 = 0x80000000u;
+// A `prims` entry that no leaf covers (all bits set, the sphere bit among them).
+const PRIM_PADDING: u32 = 0xffffffffu;
 // The largest f32: "no limit" for ray parameters (WGSL has no infinity literal).
 const F32_MAX: f32 = 3.40282347e38;
 // The smallest normal f32 (Rust's f32::MIN_POSITIVE).

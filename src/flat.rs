@@ -170,6 +170,20 @@ impl BvhNode {
     }
 }
 
+/// A planar mirror (`crate::planar_mirror`): the plane n · p = d of a set of mirror triangles
+/// of one material, their bounds, and how far from the plane a vertex of theirs may lie. Three
+/// vec4s; the shader reads them from `Frame::planar_mirrors`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct PlanarMirror {
+    pub n: [f32; 3],
+    pub d: f32,
+    pub lo: [f32; 3],
+    pub tolerance: f32,
+    pub hi: [f32; 3],
+    pub material: u32,
+}
+
 /// Everything the integrators read, in the layout both backends share.
 #[derive(Clone, Debug, Default)]
 pub struct FlatScene {
@@ -187,6 +201,8 @@ pub struct FlatScene {
     pub wide: Vec<crate::wide_bvh::WideNode>,
     /// Seconds the BVH build took (`bvh::build`, not the SIMD packs), for logs.
     pub bvh_seconds: f64,
+    /// The planar mirrors (`planar_mirror::find`), largest first.
+    pub planar_mirrors: Vec<PlanarMirror>,
 }
 
 fn f3(v: [f64; 3]) -> [f32; 3] {
@@ -275,8 +291,10 @@ impl FlatScene {
         let started = std::time::Instant::now();
         let (nodes, prims) = bvh::build(&triangles, &spheres);
         let bvh_seconds = started.elapsed().as_secs_f64();
+        let planar_mirrors = crate::planar_mirror::find(&triangles, &materials);
         FlatScene {
             bvh_seconds,
+            planar_mirrors,
             materials,
             emitters,
             ..FlatScene::from_tree(triangles, spheres, nodes, prims)

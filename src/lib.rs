@@ -27,6 +27,7 @@ pub mod merging;
 pub mod method;
 pub mod output;
 pub mod packet;
+pub mod planar_mirror;
 pub mod render;
 pub mod sampling;
 pub mod scene;

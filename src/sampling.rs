@@ -93,6 +93,12 @@ pub fn dim_splat(bounce: u32) -> u32 {
 pub fn dim_merge(bounce: u32) -> u32 {
     0x5800_0000u32.wrapping_add(bounce)
 }
+/// BDPT's and VCM's Russian roulette on the visibility ray of next-event estimation through
+/// planar mirror `i` at camera bounce `bounce` (lane `i`; `crate::planar_mirror`).
+#[inline]
+pub fn dim_mirror(bounce: u32) -> u32 {
+    0x5C00_0000u32.wrapping_add(bounce)
+}
 /// The most shadow rays per diffuse vertex (`--light-samples`): `j` fits a byte of
 /// [`dim_light_extra`].
 pub const MAX_LIGHT_SAMPLES: u32 = 256;

@@ -9,7 +9,9 @@
 //! (tncg15_room, glass_room), Welch's t per 8x8 block with Bonferroni at α = 0.01. The caustic
 //! and the tiny light are compared by their image means only, as their path-traced tests are:
 //! a block's few thousand samples may hold none of the rare bright paths, and then its sample
-//! variance is wrong too. Planted: tncg15_room's mirrors 10 % dim, and the caustic's glass 10 %
+//! variance is wrong too. Planted: tncg15_room's mirrors 10 % dim, the light that reaches its
+//! walls from the mirror wall counted twice (next-event estimation through the mirror, and the
+//! other strategies without their partition, `planar_mirror`), and the caustic's glass 10 %
 //! dim, each rejected.
 
 use crate::common::reference::{compare, film_mean_z, means_agree, read};
@@ -120,6 +122,23 @@ fn bdpt_reference_test_rejects_mirrors_10_percent_dim() {
         1024,
         15,
         DIM_SPECULAR
+    ));
+}
+
+#[test]
+fn bdpt_reference_test_rejects_light_by_a_planar_mirror_counted_twice() {
+    // Next-event estimation through the mirror wall takes the light that reaches a diffuse
+    // vertex from the mirror with weight 1; with the other strategies' weights left on those
+    // paths as well, that light is counted about twice.
+    assert!(!against_reference(
+        "scenes/tncg15_room.json",
+        TNCG15_REFERENCE,
+        1024,
+        15,
+        Faults {
+            mirror_light_twice: true,
+            ..Faults::NONE
+        }
     ));
 }
 

@@ -3,7 +3,7 @@
 //! naga's reflection of the WGSL declarations, so the two cannot drift apart.
 
 use hexray::camera::Camera;
-use hexray::flat::{BvhNode, Emitter, Material, Sphere, Triangle};
+use hexray::flat::{BvhNode, Emitter, Material, PlanarMirror, Sphere, Triangle};
 use hexray::gpu::render::{Frame, PixelSums};
 use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
 use hexray::hash_grid::GridParams;
@@ -119,7 +119,17 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             continue_at_vanishing_density,
             merge_rr_threshold,
             merge_rr_undivided,
-            pad
+            planar_mirror_count,
+            pad,
+            planar_mirrors
+        }),
+        rust_layout!(PlanarMirror {
+            n,
+            d,
+            lo,
+            tolerance,
+            hi,
+            material
         }),
         rust_layout!(GridParams {
             min,
@@ -204,9 +214,10 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
     use hexray::flat::{
         EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
-        PRIM_SPHERE_BIT,
+        PRIM_PADDING, PRIM_SPHERE_BIT,
     };
     use hexray::gpu::bidirectional::SCAN_BLOCK;
+    use hexray::planar_mirror::{MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR, PARALLEL};
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
     use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -220,6 +231,10 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         KIND_EMITTER,
         NOT_AN_EMITTER,
         PRIM_SPHERE_BIT,
+        PRIM_PADDING,
+        MAX_PLANAR_MIRRORS,
+        NO_PLANAR_MIRROR,
+        PARALLEL,
         EMPTY_SLOT,
         NO_VERTEX,
         DIM_CAMERA,

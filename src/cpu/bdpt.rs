@@ -33,12 +33,15 @@ use crate::bvh::intersect_closest;
 use crate::camera::Camera;
 use crate::cpu::light_path::{is_diffuse, max_path_edges};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::flat::{FlatScene, KIND_EMITTER};
+use crate::flat::{FlatScene, KIND_EMITTER, KIND_MIRROR};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::packet::occluded_all;
-use crate::sampling::{dim_bsdf, dim_connection, dim_light, dim_merge, Sampler, DIM_CAMERA};
+use crate::planar_mirror::{image, planar_mirror_of};
+use crate::sampling::{
+    dim_bsdf, dim_connection, dim_light, dim_merge, dim_mirror, Sampler, DIM_CAMERA,
+};
 use crate::subpath::{
     density_vanishes, merge_camera_share, merge_light_share, merge_survival, shadow_survival,
     weight_connection, weight_emission, weight_next_event, LightVertex, MergeMis, SubpathMis,
@@ -145,13 +148,28 @@ impl CameraPass<'_> {
             terms.add(value, 0.0);
             return;
         }
+        self.defer_visibility(terms, a, b, value, 1.0 / q, rays);
+    }
+
+    /// Adds `value` times `factor` where surface points `a` and `b` see each other, else 0;
+    /// the ray waits in `terms`.
+    #[inline]
+    fn defer_visibility(
+        &self,
+        terms: &mut CameraTerms,
+        a: (Vec3, Vec3, Vec3),
+        b: (Vec3, Vec3, Vec3),
+        value: Vec3,
+        factor: f32,
+        rays: &mut u64,
+    ) {
         let to_b = b.0 - a.0;
         let origin = offset_ray_origin(a.0, a.1, a.2, to_b);
         let end = offset_ray_origin(b.0, b.1, b.2, -to_b);
         *rays += 1;
         terms.add_if_clear(
             value,
-            1.0 / q,
+            factor,
             Ray {
                 o: origin,
                 d: end - origin,
@@ -192,6 +210,12 @@ impl CameraPass<'_> {
         // Product of etap² over refractions, for Russian roulette (as in path.rs).
         let mut eta_scale = 1.0f32;
         let mut bounce = 0u32;
+        // Next-event estimation through planar mirrors (BDPT, VCM): whether the vertex before
+        // this one was diffuse, and whether this one was reached from a diffuse vertex by way
+        // of a planar mirror (`planar_mirror`: such emission is that strategy's alone).
+        let through_mirrors = self.connects && !scene.planar_mirrors.is_empty();
+        let mut previous_diffuse = false;
+        let mut by_a_mirror = false;
 
         loop {
             // Step 2 - closest hit; the quantities turn the direction's density into an area
@@ -213,8 +237,9 @@ impl CameraPass<'_> {
 
             // Step 3 - emission (s = 0): an emitter seen from its front, weighted against the
             // light point taken by next-event estimation or by a light subpath (SPPM meets it
-            // only through mirrors and glass, where nothing else can: weight 1).
-            if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges {
+            // only through mirrors and glass, where nothing else can: weight 1). Seen from a
+            // diffuse vertex in a planar mirror, it is next-event estimation's (step 4b).
+            if material.kind == KIND_EMITTER && cos_o > 0.0 && depth <= max_edges && !by_a_mirror {
                 let pdf_area = emitter_pdf_area(scene, hit.prim);
                 let w = if self.connects {
                     weight_emission(&mis, pdf_area, cos_o * FRAC_1_PI)
@@ -281,6 +306,61 @@ impl CameraPass<'_> {
                     let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                     let light = (ls.p, ls.p_err, ls.n);
                     self.visibility(terms, here, light, value, u_bsdf[3], rays);
+                }
+
+                // Step 4b - next-event estimation through each planar mirror: the same emitter
+                // point, reflected in the mirror's plane, is a light of the same area density;
+                // the path x → m → y has the image's geometry term and the mirror's
+                // reflectance, and weight 1 (`planar_mirror`). A closest-hit ray finds m on the
+                // mirror with x m clear, a shadow ray m y.
+                if through_mirrors && depth + 1 < max_edges {
+                    let u_mirror = sampler.draw4(dim_mirror(bounce));
+                    for (i, mirror) in scene.planar_mirrors.iter().enumerate() {
+                        let Some((y_image, n_image, _)) = image(mirror, hit.p, ls.p, ls.n) else {
+                            continue;
+                        };
+                        let to_image = y_image - hit.p;
+                        let dist2 = to_image.length_squared();
+                        let wi = to_image / dist2.sqrt();
+                        let cos_l = -n_image.dot(wi);
+                        let bsdf = eval_diffuse(albedo, n_facing, wo, wi);
+                        if bsdf.pdf <= 0.0 || cos_l <= 0.0 || dist2 <= 0.0 {
+                            continue;
+                        }
+                        // The mirror's reflectance (a specular bounce: the test-only
+                        // specular_scale too).
+                        let reflectance =
+                            Vec3::from(scene.materials[mirror.material as usize].color)
+                                * faults.specular_scale;
+                        let value = throughput
+                            * bsdf.f
+                            * reflectance
+                            * ls.le
+                            * (bsdf.cos_i * cos_l / (dist2 * ls.pdf_area));
+                        let q = shadow_survival(value, self.shadow_threshold);
+                        if u_mirror[i] >= q {
+                            continue;
+                        }
+                        *rays += 1;
+                        let ray = Ray {
+                            o: offset_ray_origin(hit.p, hit.p_err, hit.n, wi),
+                            d: wi,
+                        };
+                        let Some(m) = intersect_closest(scene, &ray, f32::MAX)
+                            .filter(|m| planar_mirror_of(scene, m.prim) == Some(i))
+                        else {
+                            continue;
+                        };
+                        let light = (ls.p, ls.p_err, ls.n);
+                        self.defer_visibility(
+                            terms,
+                            (m.p, m.p_err, m.n),
+                            light,
+                            value,
+                            1.0 / q,
+                            rays,
+                        );
+                    }
                 }
 
                 if let Some((photons, query, _)) = &merging {
@@ -379,6 +459,12 @@ impl CameraPass<'_> {
             if throughput.max_element() <= 0.0 || depth >= max_edges {
                 break;
             }
+            by_a_mirror = through_mirrors
+                && !faults.mirror_light_twice
+                && previous_diffuse
+                && material.kind == KIND_MIRROR
+                && planar_mirror_of(scene, hit.prim).is_some();
+            previous_diffuse = diffuse;
             ray = Ray {
                 o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
                 d: bs.wi,

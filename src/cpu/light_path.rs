@@ -24,10 +24,11 @@ use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
 use crate::bvh::intersect_closest;
 use crate::camera::{Camera, Raster};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER};
+use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
 use crate::packet::occluded_all;
+use crate::planar_mirror::starts_by_a_mirror;
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
@@ -218,6 +219,12 @@ impl LightPass<'_> {
             d: emission.dir,
         };
         let mut bounce = 0u32;
+        // Next-event estimation through planar mirrors takes the paths whose light end is the
+        // light point, a planar mirror and a diffuse vertex (BDPT, VCM; `planar_mirror`): the
+        // primitive of this subpath's first hit tells.
+        let through_mirrors =
+            self.mode == LightPassMode::Bidirectional && !scene.planar_mirrors.is_empty();
+        let mut first_prim = PRIM_PADDING;
 
         loop {
             // Step 3 - closest hit; the quantities turn the direction's density into an area
@@ -242,6 +249,18 @@ impl LightPass<'_> {
             let diffuse = is_diffuse(&material);
             if material.kind == KIND_EMITTER && !diffuse {
                 // A black emitter absorbs.
+                break;
+            }
+            if length == 1 {
+                first_prim = hit.prim;
+            } else if length == 2
+                && through_mirrors
+                && !self.faults.mirror_light_twice
+                && starts_by_a_mirror(scene, first_prim, diffuse)
+            {
+                // The light came to this diffuse vertex from a planar mirror: every path
+                // through it is next-event estimation's through the mirror (weight 1), so
+                // the subpath stores and splats nothing more.
                 break;
             }
             if diffuse {

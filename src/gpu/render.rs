@@ -6,8 +6,9 @@ use super::shader::{ArrayLengths, Residency};
 use crate::camera::Camera;
 use crate::cpu::Faults;
 use crate::film::Film;
-use crate::flat::FlatScene;
+use crate::flat::{FlatScene, PlanarMirror};
 use crate::method::Method;
+use crate::planar_mirror::MAX_PLANAR_MIRRORS;
 use anyhow::{anyhow, bail, Context, Result};
 use bytemuck::{Pod, Zeroable};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -71,7 +72,11 @@ pub struct Frame {
     pub merge_rr_threshold: f32,
     /// `Faults::merge_rr_undivided` as 0 or 1 (test-only).
     pub merge_rr_undivided: u32,
-    pub pad: [u32; 2],
+    /// How many of `planar_mirrors` the scene has (`planar_mirror::find`).
+    pub planar_mirror_count: u32,
+    pub pad: u32,
+    /// The scene's planar mirrors, for next-event estimation through them (BDPT, VCM).
+    pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds
@@ -478,7 +483,11 @@ impl GpuRenderer {
                 0.0
             },
             merge_rr_undivided: faults.merge_rr_undivided as u32,
-            pad: [0; 2],
+            planar_mirror_count: scene.planar_mirrors.len() as u32,
+            pad: 0,
+            planar_mirrors: std::array::from_fn(|i| {
+                scene.planar_mirrors.get(i).copied().unwrap_or_default()
+            }),
         };
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),

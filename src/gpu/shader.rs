@@ -21,12 +21,16 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 13] = [
+pub const BODY: [(&str, &str); 14] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
     ("bsdf.wgsl", include_str!("../../shaders/bsdf.wgsl")),
     ("light.wgsl", include_str!("../../shaders/light.wgsl")),
+    (
+        "planar_mirror.wgsl",
+        include_str!("../../shaders/planar_mirror.wgsl"),
+    ),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     ("film.wgsl", include_str!("../../shaders/film.wgsl")),
     ("splat.wgsl", include_str!("../../shaders/splat.wgsl")),
