@@ -3,7 +3,8 @@
 // glass), and at each of its vertices every strategy that ends there: the emitter it hits
 // (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
-// rouletted by its contribution. With photons, the camera pass of the merging methods: VCM adds
+// rouletted by its contribution; next-event estimation also aims at the light's image in each
+// planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With photons, the camera pass of the merging methods: VCM adds
 // the merges at every diffuse vertex (hash_grid.wgsl), SPPM merges at the first diffuse vertex
 // alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
 // rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
@@ -23,13 +24,20 @@ fn visibility(a_p: vec3<f32>, a_err: vec3<f32>, a_n: vec3<f32>, b_p: vec3<f32>, 
     if u >= q {
         return 0.0;
     }
+    return visibility_after_roulette(a_p, a_err, a_n, b_p, b_err, b_n, 1.0 / q);
+}
+
+// `factor` (1 / q of a roulette already passed) where surface points a and b see each other,
+// else 0 (`CameraPass::visibility_after_roulette`, which leaves the ray to be traced with the
+// tile's).
+fn visibility_after_roulette(a_p: vec3<f32>, a_err: vec3<f32>, a_n: vec3<f32>, b_p: vec3<f32>, b_err: vec3<f32>, b_n: vec3<f32>, factor: f32) -> f32 {
     let to_b = b_p - a_p;
     let origin = offset_ray_origin(a_p, a_err, a_n, to_b);
     let end = offset_ray_origin(b_p, b_err, b_n, -to_b);
     if occluded(Ray(origin, end - origin), 1.0) {
         return 0.0;
     }
-    return 1.0 / q;
+    return factor;
 }
 
 // The radiance that one camera subpath of pixel (x, y) gathers by the strategies with t >= 2,
@@ -155,16 +163,11 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                     if !candidate.found {
                         continue;
                     }
-                    let mh = surface_hit(to_mirror, candidate);
-                    if planar_mirror_of(mh.prim) != i {
+                    let mirror_hit = surface_hit(to_mirror, candidate);
+                    if planar_mirror_of(mirror_hit.prim) != i {
                         continue;
                     }
-                    let to_b = ls.p - mh.p;
-                    let origin = offset_ray_origin(mh.p, mh.p_err, mh.n, to_b);
-                    let end = offset_ray_origin(ls.p, ls.p_err, ls.n, -to_b);
-                    if !occluded(Ray(origin, end - origin), 1.0) {
-                        radiance += value * (1.0 / q);
-                    }
+                    radiance += value * visibility_after_roulette(mirror_hit.p, mirror_hit.p_err, mirror_hit.n, ls.p, ls.p_err, ls.n, 1.0 / q);
                 }
             }
 
@@ -270,7 +273,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
         if max_element(throughput) <= 0.0 || depth >= max_edges {
             break;
         }
-        by_a_mirror = through_mirrors && previous_diffuse && material.kind == KIND_MIRROR && planar_mirror_of(hit.prim) != NO_PLANAR_MIRROR;
+        by_a_mirror = through_mirrors && previous_diffuse && planar_mirror_of(hit.prim) != NO_PLANAR_MIRROR;
         previous_diffuse = diffuse;
         ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
 

@@ -1,7 +1,9 @@
 // The light pass of light tracing, BDPT, SPPM and VCM: `src/cpu/light_path.rs` again, with the
 // same names, steps and step comments. One light subpath per invocation, its non-specular
 // vertices (the light point included) splatted into the pixels that see them (t = 1; not for
-// SPPM) and, but for light tracing, stored in the pool for the camera pass. Here each splat's
+// SPPM) and, but for light tracing, stored in the pool for the camera pass; for BDPT and VCM a
+// subpath whose first hit is a planar mirror ends at the diffuse vertex after it (next-event
+// estimation through the mirror takes those paths: planar_mirror.wgsl). Here each splat's
 // visibility ray is traced where it is met; the CPU traces a chunk's splat rays together in SIMD
 // packets (`PendingSplat`, `add_splats`), which splats the same values, and splat sums do not
 // depend on their order.

@@ -2,37 +2,18 @@
 // same names. The light point of next-event estimation reflected in a planar mirror's plane is a
 // light of the same area density; the path x -> m -> y through the mirror point m is taken by
 // that strategy alone (weight 1), and by no other: a partition of the paths whose light end is a
-// light point, a planar mirror and a diffuse vertex, which keeps the estimate unbiased.
+// light point, a planar mirror and a diffuse vertex, which keeps the estimate unbiased. The host
+// finds the planar mirrors and marks each triangle with its plane (`Triangle::planar_mirror`).
 
-// How far a mirror triangle's normal may turn from its plane's: |n . n_plane| >= 1 - this.
-const PARALLEL: f32 = 1e-6;
-
-// Marks a primitive on no planar mirror (`planar_mirror_of`).
+// Marks a triangle on no planar mirror (Triangle::planar_mirror).
 const NO_PLANAR_MIRROR: u32 = 0xffffffffu;
 
-// Whether triangle t lies in `plane`: its normal parallel to the plane's and each vertex within
-// the plane's tolerance of it.
-fn in_plane(plane: PlanarMirror, t: Triangle) -> bool {
-    return abs(dot(plane.n, t.n)) >= 1.0 - PARALLEL
-        && abs(dot(plane.n, t.v0) - plane.d) <= plane.tolerance
-        && abs(dot(plane.n, t.v1) - plane.d) <= plane.tolerance
-        && abs(dot(plane.n, t.v2) - plane.d) <= plane.tolerance;
-}
-
-// The planar mirror that primitive `prim` (a SurfaceHit's) belongs to, or NO_PLANAR_MIRROR: a
-// triangle of the mirror's material in its plane.
+// The planar mirror that primitive `prim` (a SurfaceHit's) is part of, or NO_PLANAR_MIRROR.
 fn planar_mirror_of(prim: u32) -> u32 {
     if frame.planar_mirror_count == 0u || (prim & PRIM_SPHERE_BIT) != 0u {
         return NO_PLANAR_MIRROR;
     }
-    let t = triangles[prim];
-    for (var i = 0u; i < frame.planar_mirror_count; i++) {
-        let plane = frame.planar_mirrors[i];
-        if plane.material == t.material && in_plane(plane, t) {
-            return i;
-        }
-    }
-    return NO_PLANAR_MIRROR;
+    return triangles[prim].planar_mirror;
 }
 
 // Whether a path whose light end is the light point, then the vertex of primitive `first_prim`,
@@ -49,17 +30,15 @@ struct MirrorImage {
     // The image y' of y in the plane, and its normal.
     y_image: vec3<f32>,
     n_image: vec3<f32>,
-    // Where the segment x y' crosses the plane.
-    m: vec3<f32>,
 }
 
 // The light point y (normal n_y) seen from x by way of `mirror`: the image y' of y in the
-// mirror's plane, the image's normal, and the point m where the segment x y' crosses the plane;
-// not found where x and y are not strictly on the same side of the plane or m falls outside the
+// mirror's plane and the image's normal; not found where x and y are not strictly on the same
+// side of the plane or the point m where the segment x y' crosses the plane falls outside the
 // mirror's bounds. Whether m is on the mirror and the segment x m is clear is for a closest-hit
 // ray to say.
 fn image(mirror: PlanarMirror, x: vec3<f32>, y: vec3<f32>, n_y: vec3<f32>) -> MirrorImage {
-    var r = MirrorImage(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    var r = MirrorImage(false, vec3<f32>(0.0), vec3<f32>(0.0));
     // Signed distances to the plane.
     let sx = dot(mirror.n, x) - mirror.d;
     let sy = dot(mirror.n, y) - mirror.d;
@@ -69,8 +48,8 @@ fn image(mirror: PlanarMirror, x: vec3<f32>, y: vec3<f32>, n_y: vec3<f32>) -> Mi
     r.y_image = y - 2.0 * sy * mirror.n;
     r.n_image = n_y - 2.0 * dot(mirror.n, n_y) * mirror.n;
     // The segment x y' crosses the plane where the signed distance goes from sx to -sy.
-    r.m = x + (r.y_image - x) * (sx / (sx + sy));
+    let m = x + (r.y_image - x) * (sx / (sx + sy));
     let slack = vec3<f32>(mirror.tolerance);
-    r.found = all(r.m >= mirror.lo - slack) && all(r.m <= mirror.hi + slack);
+    r.found = all(m >= mirror.lo - slack) && all(m <= mirror.hi + slack);
     return r;
 }

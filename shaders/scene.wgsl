@@ -8,7 +8,9 @@ struct Triangle {
     v1: vec3<f32>,
     emitter: u32,
     v2: vec3<f32>,
-    pad0: u32,
+    // The index in frame.planar_mirrors of the planar mirror this triangle is part of, or
+    // NO_PLANAR_MIRROR.
+    planar_mirror: u32,
     n: vec3<f32>,
     pad1: u32,
 }

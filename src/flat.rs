@@ -31,8 +31,9 @@ pub const PRIM_SPHERE_BIT: u32 = 1 << 31;
 pub const PRIM_PADDING: u32 = u32::MAX;
 
 /// A triangle: vertices as given (the winding fixes an emitter's front), its material, its row
-/// in the emitter table, and its unit normal, computed once here rather than at every hit (a
-/// cross product and a square root that sat on every path vertex's critical path). Four vec4s.
+/// in the emitter table, the planar mirror it belongs to, and its unit normal, computed once
+/// here rather than at every hit (a cross product and a square root that sat on every path
+/// vertex's critical path). Four vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Triangle {
@@ -41,7 +42,9 @@ pub struct Triangle {
     pub v1: [f32; 3],
     pub emitter: u32,
     pub v2: [f32; 3],
-    pub pad0: u32,
+    /// The index in `FlatScene::planar_mirrors` of the planar mirror this triangle is part of,
+    /// or `planar_mirror::NO_PLANAR_MIRROR` (`planar_mirror::find` sets it).
+    pub planar_mirror: u32,
     /// Unit geometric normal, (v1 - v0) x (v2 - v0) normalised (in f64, rounded once).
     pub n: [f32; 3],
     pub pad1: u32,
@@ -62,7 +65,7 @@ impl Triangle {
             v1,
             emitter: NOT_AN_EMITTER,
             v2,
-            pad0: 0,
+            planar_mirror: crate::planar_mirror::NO_PLANAR_MIRROR,
             n: (b - a).cross(c - a).normalize().as_vec3().into(),
             pad1: 0,
         }
@@ -291,7 +294,7 @@ impl FlatScene {
         let started = std::time::Instant::now();
         let (nodes, prims) = bvh::build(&triangles, &spheres);
         let bvh_seconds = started.elapsed().as_secs_f64();
-        let planar_mirrors = crate::planar_mirror::find(&triangles, &materials);
+        let planar_mirrors = crate::planar_mirror::find(&mut triangles, &materials);
         FlatScene {
             bvh_seconds,
             planar_mirrors,

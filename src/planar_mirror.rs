@@ -3,29 +3,34 @@
 //! A diffuse wall lit by way of a plane mirror sees the light's mirror image: a second light,
 //! as small and as bright as the first. Next-event estimation cannot aim at it (the light point
 //! it samples is the real one), BSDF sampling meets it as rarely as it meets the light itself,
-//! and a light subpath reaches the wall by way of the mirror only as one of its vertices. So on
-//! tncg15_room, whose mirror wall doubles the room's light, that light is the noisiest part of
-//! the walls' (docs/performance.md). Reflecting the light point of next-event estimation in the
-//! mirror's plane gives a point y' of the same area density, and the path x → m → y through
-//! the mirror point m on the segment x y' is a next-event path of its own: its geometry term is
-//! that of x and y', |x − y'| = |x − m| + |m − y|, and it carries the mirror's reflectance.
+//! and a light subpath reaches the wall by way of the mirror only with the few of its
+//! directions that meet the mirror. On tncg15_room, whose mirror wall doubles the room's light,
+//! that light is noisy for every method (docs/performance.md). Reflecting the light point y of
+//! next-event estimation in the mirror's plane gives a point y' of the same area density, and
+//! the path x → m → y through the point m where the segment x y' crosses the mirror is a
+//! next-event path of its own: its geometry term is that of x and y' (|x − y'| = |x − m| +
+//! |m − y|, and the cosine at y' is the cosine at y toward m), and it carries the mirror's
+//! reflectance.
 //!
-//! **Which strategy takes such a path.** The bidirectional methods weigh every strategy that
-//! makes a path by MIS. Here the weights are a partition rather than a heuristic: a path whose
+//! **Which strategy takes such a path.** The bidirectional methods weigh the strategies that
+//! make a path by MIS. Here the weights are a partition rather than a heuristic: a path whose
 //! light end is a light point, a planar mirror and a diffuse vertex ([`starts_by_a_mirror`])
 //! is taken by next-event estimation through the mirror alone (weight 1), and by no other
-//! strategy (weight 0: the camera subpath that meets the light from that mirror, and the light
-//! subpath's vertices from the diffuse one on, which the light pass does not store or splat).
-//! Any partition of the paths among the strategies is a valid MIS weighting (Veach's thesis,
-//! eq. 9.3: the weights of a path sum to 1), so the estimate stays unbiased; and for a small
-//! light seen from a diffuse vertex, next-event estimation is the strategy the balance heuristic
-//! gives nearly all the weight to anyway (Veach's thesis, fig. 10.3). Paths without that light
-//! end keep their weights over the other strategies, unchanged. Path tracing (the unbiased
-//! reference), light tracing and SPPM do not take this strategy.
+//! strategy (weight 0): not by the camera subpath that meets the light in that mirror from a
+//! diffuse vertex, and not by the light subpath's vertices from that diffuse vertex on, which
+//! the light pass does not store or splat. MIS needs only that a path's weights over the
+//! strategies that can make it sum to 1 (Veach's thesis, section 9.2), which a partition
+//! satisfies, so the estimate stays unbiased. For a small light seen from a diffuse vertex,
+//! next-event estimation is the strategy the power heuristic gives most of the weight anyway;
+//! where the light's image is close to the vertex, the BSDF sampling it replaces would have
+//! done better. Paths without that light end keep their weights over the other strategies.
+//! Path tracing (the unbiased reference), light tracing and SPPM do not take this strategy.
 //!
-//! A planar mirror is the set of the scene's mirror triangles in one plane, found here once
-//! ([`find`]); a scene keeps the [`MAX_PLANAR_MIRRORS`] of largest area. Mirror spheres are not
-//! planar and stay as they were. `shaders/planar_mirror.wgsl` is this module again.
+//! A planar mirror is the set of the scene's mirror triangles of one material in one plane,
+//! found once ([`find`]), which also marks each triangle with its plane
+//! (`Triangle::planar_mirror`). A scene keeps the [`MAX_PLANAR_MIRRORS`] of largest area.
+//! Mirror spheres are not planar and stay as they were. `shaders/planar_mirror.wgsl` is this
+//! module again.
 
 use crate::flat::{
     triangle_area, FlatScene, Material, PlanarMirror, Triangle, KIND_MIRROR, PRIM_SPHERE_BIT,
@@ -36,66 +41,91 @@ use glam::{DVec3, Vec3};
 /// per diffuse vertex whose mirror point falls in its bounds.
 pub const MAX_PLANAR_MIRRORS: u32 = 4;
 
+/// The most planes [`find`] tells apart: past them, a mirror triangle in a plane not yet seen
+/// is no planar mirror's (a tessellated curved mirror, whose facets are each a plane of their
+/// own, would otherwise cost time quadratic in its facets).
+pub const MAX_CANDIDATE_PLANES: usize = 64;
+
 /// How far a mirror triangle's normal may turn from its plane's: |n · n_plane| ≥ 1 − this.
 pub const PARALLEL: f32 = 1e-6;
 
-/// Marks a primitive on no planar mirror (the shader's `planar_mirror_of`; `None` here).
+/// Marks a triangle on no planar mirror (`Triangle::planar_mirror`).
 pub const NO_PLANAR_MIRROR: u32 = u32::MAX;
+
+/// How far from its plane a vertex may lie, in units of f32's epsilon times the largest
+/// coordinate of the scene's mirror triangles: a vertex given in f64 and rounded to f32 moves by
+/// half an ulp of its coordinates.
+const TOLERANCE_EPSILONS: f32 = 32.0;
 
 /// The planar mirrors of a scene: its mirror triangles grouped by plane (normal parallel, every
 /// vertex within the plane's tolerance, the same material), the largest `MAX_PLANAR_MIRRORS`
-/// by area, largest first.
-pub fn find(triangles: &[Triangle], materials: &[Material]) -> Vec<PlanarMirror> {
-    // Coordinates' magnitude sets how far from its plane a vertex given in f32 may lie.
+/// by area, largest first; sets each triangle's `planar_mirror` to its plane's index (or
+/// `NO_PLANAR_MIRROR`), which is what the integrators read.
+pub fn find(triangles: &mut [Triangle], materials: &[Material]) -> Vec<PlanarMirror> {
+    let is_mirror = |t: &Triangle| {
+        let area = triangle_area(t);
+        materials[t.material as usize].kind == KIND_MIRROR && area > 0.0 && area.is_finite()
+    };
     let extent = triangles
         .iter()
+        .filter(|t| is_mirror(t))
         .flat_map(|t| [t.v0, t.v1, t.v2])
         .flatten()
-        .fold(1.0f64, |m, c| m.max(f64::from(c).abs()));
-    let tolerance = 1e-5 * extent;
-    // (mirror, area) of each plane found so far.
+        .fold(0.0f32, |m, c| m.max(c.abs()));
+    let tolerance = TOLERANCE_EPSILONS * f32::EPSILON * extent.max(f32::MIN_POSITIVE);
+    // (mirror, area) of each plane found, and the plane of each triangle.
     let mut planes: Vec<(PlanarMirror, f64)> = Vec::new();
-    for t in triangles {
-        let m = &materials[t.material as usize];
-        let area = f64::from(triangle_area(t));
-        if m.kind != KIND_MIRROR || area <= 0.0 || !area.is_finite() {
+    let mut plane_of = vec![NO_PLANAR_MIRROR; triangles.len()];
+    for (t, plane) in triangles.iter().zip(plane_of.iter_mut()) {
+        if !is_mirror(t) {
             continue;
         }
-        let index = planes
+        let area = f64::from(triangle_area(t));
+        let (lo, hi) = triangle_bounds(t);
+        let found = planes
             .iter()
             .position(|(p, _)| p.material == t.material && in_plane(p, t));
-        let (lo, hi) = triangle_bounds(t);
-        match index {
-            Some(k) => {
-                let (p, a) = &mut planes[k];
-                p.lo = Vec3::from(p.lo).min(lo).into();
-                p.hi = Vec3::from(p.hi).max(hi).into();
-                *a += area;
-            }
-            None => {
-                let n = DVec3::from(t.n.map(f64::from));
-                let d = n.dot(DVec3::from(t.v0.map(f64::from)));
-                planes.push((
-                    PlanarMirror {
-                        n: t.n,
-                        d: d as f32,
-                        lo: lo.into(),
-                        tolerance: tolerance as f32,
-                        hi: hi.into(),
-                        material: t.material,
-                    },
-                    area,
-                ));
+        if let Some(k) = found {
+            let (p, a) = &mut planes[k];
+            p.lo = Vec3::from(p.lo).min(lo).into();
+            p.hi = Vec3::from(p.hi).max(hi).into();
+            *a += area;
+            *plane = k as u32;
+        } else if planes.len() < MAX_CANDIDATE_PLANES {
+            let n = DVec3::from(t.n.map(f64::from));
+            let d = n.dot(DVec3::from(t.v0.map(f64::from)));
+            let mirror = PlanarMirror {
+                n: t.n,
+                d: d as f32,
+                lo: lo.into(),
+                tolerance,
+                hi: hi.into(),
+                material: t.material,
+            };
+            // A triangle defines its plane only if it lies in it within the tolerance (its
+            // normal, in f32, may not).
+            if in_plane(&mirror, t) {
+                *plane = planes.len() as u32;
+                planes.push((mirror, area));
             }
         }
     }
     // Largest first; a stable sort keeps the file's order among equal areas.
-    planes.sort_by(|a, b| b.1.total_cmp(&a.1));
-    planes
-        .into_iter()
-        .take(MAX_PLANAR_MIRRORS as usize)
-        .map(|(p, _)| p)
-        .collect()
+    let mut order: Vec<usize> = (0..planes.len()).collect();
+    order.sort_by(|&a, &b| planes[b].1.total_cmp(&planes[a].1));
+    order.truncate(MAX_PLANAR_MIRRORS as usize);
+    let mut index = vec![NO_PLANAR_MIRROR; planes.len()];
+    for (i, &k) in order.iter().enumerate() {
+        index[k] = i as u32;
+    }
+    for (t, plane) in triangles.iter_mut().zip(plane_of) {
+        t.planar_mirror = if plane == NO_PLANAR_MIRROR {
+            NO_PLANAR_MIRROR
+        } else {
+            index[plane as usize]
+        };
+    }
+    order.iter().map(|&k| planes[k].0).collect()
 }
 
 /// Whether triangle `t` lies in `plane`: its normal parallel to the plane's and each vertex
@@ -113,18 +143,14 @@ fn triangle_bounds(t: &Triangle) -> (Vec3, Vec3) {
     (a.min(b).min(c), a.max(b).max(c))
 }
 
-/// The planar mirror that primitive `prim` (a `SurfaceHit::prim`) belongs to, if any: a
-/// triangle of the mirror's material in its plane.
+/// The planar mirror that primitive `prim` (a `SurfaceHit::prim`) is part of, if any.
 #[inline]
 pub fn planar_mirror_of(scene: &FlatScene, prim: u32) -> Option<usize> {
     if scene.planar_mirrors.is_empty() || prim & PRIM_SPHERE_BIT != 0 {
         return None;
     }
-    let t = &scene.triangles[prim as usize];
-    scene
-        .planar_mirrors
-        .iter()
-        .position(|p| p.material == t.material && in_plane(p, t))
+    let i = scene.triangles[prim as usize].planar_mirror;
+    (i != NO_PLANAR_MIRROR).then_some(i as usize)
 }
 
 /// Whether a path whose light end is the light point, then the vertex of primitive
@@ -136,12 +162,12 @@ pub fn starts_by_a_mirror(scene: &FlatScene, first_prim: u32, second_diffuse: bo
 }
 
 /// The light point `y` (normal `n_y`) seen from `x` by way of `mirror`: the image y' of `y`
-/// in the mirror's plane, the image's normal, and the point m where the segment x y' crosses
-/// the plane; `None` where `x` and `y` are not strictly on the same side of the plane or m
-/// falls outside the mirror's bounds. Whether m is on the mirror and the segment x m is clear
-/// is for a closest-hit ray to say.
+/// in the mirror's plane and the image's normal; `None` where `x` and `y` are not strictly on
+/// the same side of the plane or the point m where the segment x y' crosses the plane falls
+/// outside the mirror's bounds. Whether m is on the mirror and the segment x m is clear is for
+/// a closest-hit ray to say.
 #[inline]
-pub fn image(mirror: &PlanarMirror, x: Vec3, y: Vec3, n_y: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
+pub fn image(mirror: &PlanarMirror, x: Vec3, y: Vec3, n_y: Vec3) -> Option<(Vec3, Vec3)> {
     let n = Vec3::from(mirror.n);
     // Signed distances to the plane.
     let sx = n.dot(x) - mirror.d;
@@ -156,7 +182,7 @@ pub fn image(mirror: &PlanarMirror, x: Vec3, y: Vec3, n_y: Vec3) -> Option<(Vec3
     let slack = Vec3::splat(mirror.tolerance);
     let inside = m.cmpge(Vec3::from(mirror.lo) - slack).all()
         && m.cmple(Vec3::from(mirror.hi) + slack).all();
-    inside.then_some((y_image, n_image, m))
+    inside.then_some((y_image, n_image))
 }
 
 #[cfg(test)]
@@ -189,20 +215,49 @@ mod tests {
             // A mirror in another plane.
             Triangle::new([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 0),
         ];
-        let found = find(&wall, &mirror_material());
+        let mut triangles = wall;
+        let found = find(&mut triangles, &mirror_material());
         assert_eq!(found.len(), 2);
         assert_eq!(found[0].hi, [10.0, -6.0, 5.0]);
         assert_eq!(found[0].lo, [0.0, -6.0, -5.0]);
         assert!(in_plane(&found[0], &wall[1]));
         assert!(!in_plane(&found[0], &wall[3]));
+        let planes: Vec<u32> = triangles.iter().map(|t| t.planar_mirror).collect();
+        assert_eq!(planes, [0, 0, NO_PLANAR_MIRROR, 1]);
+    }
+
+    #[test]
+    fn a_scene_keeps_the_largest_planar_mirrors_and_tells_a_bounded_number_of_planes_apart() {
+        // Mirror triangles each in a plane of its own (z = k), the k-th of area k + 1.
+        let triangles: Vec<Triangle> = (0..MAX_CANDIDATE_PLANES + 6)
+            .map(|k| {
+                let (z, s) = (k as f32, (2.0 * (k as f32 + 1.0)).sqrt());
+                Triangle::new([0.0, 0.0, z], [s, 0.0, z], [0.0, s, z], 0)
+            })
+            .collect();
+        let mut marked = triangles.clone();
+        let found = find(&mut marked, &mirror_material());
+        // The largest of the planes told apart (the first MAX_CANDIDATE_PLANES), largest first.
+        let d: Vec<f32> = found.iter().map(|p| p.d * p.n[2]).collect();
+        let last = (MAX_CANDIDATE_PLANES - 1) as f32;
+        assert_eq!(d, [last, last - 1.0, last - 2.0, last - 3.0]);
+        for (k, t) in marked.iter().enumerate() {
+            let expected = match (MAX_CANDIDATE_PLANES - 1).checked_sub(k) {
+                Some(i) if i < MAX_PLANAR_MIRRORS as usize => i as u32,
+                _ => NO_PLANAR_MIRROR,
+            };
+            assert_eq!(t.planar_mirror, expected, "triangle {k}");
+        }
     }
 
     #[test]
     fn the_image_path_has_the_length_of_the_reflected_one() {
         let t = Triangle::new([-5.0, 0.0, -5.0], [5.0, 0.0, -5.0], [5.0, 0.0, 5.0], 0);
-        let mirror = find(&[t], &mirror_material())[0];
+        let mirror = find(&mut [t], &mirror_material())[0];
         let (x, y) = (Vec3::new(0.0, 2.0, 0.0), Vec3::new(1.0, 3.0, 1.0));
-        let (y_image, n_image, m) = image(&mirror, x, y, Vec3::Y).unwrap();
+        let (y_image, n_image) = image(&mirror, x, y, Vec3::Y).unwrap();
+        // The mirror point: where x y' meets the plane y = 0.
+        let m = x + (y_image - x) * (x.y / (x.y - y_image.y));
         assert!((m.y).abs() < 1e-6);
         let folded = (m - x).length() + (y - m).length();
         assert!(((y_image - x).length() - folded).abs() < 1e-5);

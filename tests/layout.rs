@@ -45,7 +45,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             v1,
             emitter,
             v2,
-            pad0,
+            planar_mirror,
             n,
             pad1
         }),
@@ -217,7 +217,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         PRIM_PADDING, PRIM_SPHERE_BIT,
     };
     use hexray::gpu::bidirectional::SCAN_BLOCK;
-    use hexray::planar_mirror::{MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR, PARALLEL};
+    use hexray::planar_mirror::{MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
     use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -234,7 +234,6 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         PRIM_PADDING,
         MAX_PLANAR_MIRRORS,
         NO_PLANAR_MIRROR,
-        PARALLEL,
         EMPTY_SLOT,
         NO_VERTEX,
         DIM_CAMERA,

@@ -1,7 +1,11 @@
 //! BDPT's MIS weights are a partition of unity: for a path x0 (the pinhole) … xk (on an
 //! emitter), the weights that the renderer's recursive quantities give each strategy that can
 //! make the path sum to 1, whatever the path's length and whatever mirrors and glass it passes
-//! (Veach's thesis, eq. 9.4: that sum being 1 is what makes the combination unbiased).
+//! (Veach's thesis, eq. 9.4: that sum being 1 is what makes the combination unbiased). The
+//! paths whose light end is a light point, a planar mirror and a diffuse vertex are next-event
+//! estimation's through the mirror alone (`planar_mirror`: the renderer skips the other
+//! strategies there); the recursive quantities still weigh the other strategies as here, and
+//! `tests/bdpt_references.rs` checks that partition against path tracing's references.
 //!
 //! The paths are random walks through the reference scenes (tncg15_room with its mirror wall and
 //! mirror sphere, glass_room with its glass spheres, cornell_box; pixels that see a mirror or

@@ -341,6 +341,15 @@ fn gpu_vcm_equals_cpu_on_the_same_streams() {
     }
 }
 
+/// glass_room has two planar mirrors (`planar_mirror`): the second's lane of the streams and of
+/// the shader's mirror array is checked here.
+#[test]
+fn gpu_vcm_equals_cpu_on_the_same_streams_in_glass_room() {
+    if let Some(n) = same_streams("scenes/glass_room.json", Method::Vcm, Faults::NONE) {
+        assert!(n <= FLIPPED_PIXELS_ALLOWED, "{n} pixels differ");
+    }
+}
+
 #[test]
 fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
     let ball = Faults {

@@ -5,6 +5,9 @@
 //! traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light
 //! pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
 //! strategy that can make its path (`crate::subpath`), so the sum over strategies is unbiased.
+//! Where the scene has planar mirrors, next-event estimation also aims at the light's image in
+//! each (step 4b), and the paths it makes are its alone, a partition of the weights
+//! (`crate::planar_mirror`).
 //! The visibility rays of next-event estimation and of the connections are rouletted by their
 //! contribution (`subpath::shadow_survival`).
 //!
@@ -21,7 +24,8 @@
 //!
 //! `shaders/bdpt.wgsl` is this function again, with the same names, steps and step comments.
 //!
-//! Light subpaths are stored whole, however long: on the CPU as a slice per subpath, on the GPU
+//! Light subpaths are stored whole, however long (up to where the light pass ends them for
+//! next-event estimation through a planar mirror): on the CPU as a slice per subpath, on the GPU
 //! in a pool that a wave of subpaths may overflow (the iteration is then traced again in smaller
 //! waves). No strategy is ever missing from the weights for want of storage. The CPU holds a
 //! merging iteration's photons at once; the GPU, when they outgrow its pool, merges wave by
@@ -33,7 +37,7 @@ use crate::bvh::intersect_closest;
 use crate::camera::Camera;
 use crate::cpu::light_path::{is_diffuse, max_path_edges};
 use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::flat::{FlatScene, KIND_EMITTER, KIND_MIRROR};
+use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
@@ -148,13 +152,13 @@ impl CameraPass<'_> {
             terms.add(value, 0.0);
             return;
         }
-        self.defer_visibility(terms, a, b, value, 1.0 / q, rays);
+        self.visibility_after_roulette(terms, a, b, value, 1.0 / q, rays);
     }
 
-    /// Adds `value` times `factor` where surface points `a` and `b` see each other, else 0;
-    /// the ray waits in `terms`.
+    /// Adds `value` times `factor` (1 / q of a roulette already passed) where surface points
+    /// `a` and `b` see each other, else 0; the ray waits in `terms`.
     #[inline]
-    fn defer_visibility(
+    fn visibility_after_roulette(
         &self,
         terms: &mut CameraTerms,
         a: (Vec3, Vec3, Vec3),
@@ -316,7 +320,7 @@ impl CameraPass<'_> {
                 if through_mirrors && depth + 1 < max_edges {
                     let u_mirror = sampler.draw4(dim_mirror(bounce));
                     for (i, mirror) in scene.planar_mirrors.iter().enumerate() {
-                        let Some((y_image, n_image, _)) = image(mirror, hit.p, ls.p, ls.n) else {
+                        let Some((y_image, n_image)) = image(mirror, hit.p, ls.p, ls.n) else {
                             continue;
                         };
                         let to_image = y_image - hit.p;
@@ -342,19 +346,19 @@ impl CameraPass<'_> {
                             continue;
                         }
                         *rays += 1;
-                        let ray = Ray {
+                        let to_mirror = Ray {
                             o: offset_ray_origin(hit.p, hit.p_err, hit.n, wi),
                             d: wi,
                         };
-                        let Some(m) = intersect_closest(scene, &ray, f32::MAX)
-                            .filter(|m| planar_mirror_of(scene, m.prim) == Some(i))
+                        let Some(mirror_hit) = intersect_closest(scene, &to_mirror, f32::MAX)
+                            .filter(|h| planar_mirror_of(scene, h.prim) == Some(i))
                         else {
                             continue;
                         };
                         let light = (ls.p, ls.p_err, ls.n);
-                        self.defer_visibility(
+                        self.visibility_after_roulette(
                             terms,
-                            (m.p, m.p_err, m.n),
+                            (mirror_hit.p, mirror_hit.p_err, mirror_hit.n),
                             light,
                             value,
                             1.0 / q,
@@ -462,7 +466,6 @@ impl CameraPass<'_> {
             by_a_mirror = through_mirrors
                 && !faults.mirror_light_twice
                 && previous_diffuse
-                && material.kind == KIND_MIRROR
                 && planar_mirror_of(scene, hit.prim).is_some();
             previous_diffuse = diffuse;
             ray = Ray {

@@ -1,7 +1,9 @@
 //! The light pass of light tracing and BDPT: one light subpath, traced from an emitter, each of
 //! its non-specular vertices (the light point included) connected to the pinhole camera and
 //! splatted into the pixel that sees it (the strategies with t = 1), and, for BDPT, stored for
-//! the camera pass to connect to.
+//! the camera pass to connect to. For BDPT and VCM a subpath whose first hit is a planar mirror
+//! ends at the diffuse vertex after it: every path through that vertex is next-event estimation's
+//! through the mirror (`crate::planar_mirror`).
 //!
 //! `shaders/light_path.wgsl` is this function again, with the same names, steps and step
 //! comments.
@@ -50,7 +52,8 @@ pub fn is_diffuse(material: &Material) -> bool {
 pub enum LightPassMode {
     /// Light tracing: splats weighted 1, nothing stored.
     LightTracing,
-    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored.
+    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored (but for those that the
+    /// light reaches from a planar mirror, and their successors: `planar_mirror`).
     Bidirectional,
     /// SPPM: diffuse vertices stored as photons, nothing splatted.
     PhotonMapping,

@@ -17,8 +17,8 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
-/// which tile, the method and its light pass, the film band, and the test-only faults. Eleven
-/// vec4s.
+/// which tile, the method and its light pass, the film band, the test-only faults, and the
+/// scene's planar mirrors (`planar_mirror`). Twenty-three vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Frame {
