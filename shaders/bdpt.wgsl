@@ -3,8 +3,8 @@
 // glass), and at each of its vertices every strategy that ends there: the emitter it hits
 // (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
-// rouletted by its contribution; next-event estimation also aims at the light's image in each
-// planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With photons, the camera pass of the merging methods: VCM adds
+// rouletted by its contribution; BDPT's next-event estimation also aims at the light's image in
+// each planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With photons, the camera pass of the merging methods: VCM adds
 // the merges at every diffuse vertex (hash_grid.wgsl), SPPM merges at the first diffuse vertex
 // alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
 // rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
@@ -61,10 +61,10 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
     // Product of etap^2 over refractions, for Russian roulette (as in path.wgsl).
     var eta_scale = 1.0;
     var bounce = 0u;
-    // Next-event estimation through planar mirrors (BDPT, VCM): whether the vertex before this
+    // Next-event estimation through planar mirrors (BDPT): whether the vertex before this
     // one was diffuse, and whether this one was reached from a diffuse vertex by way of a planar
     // mirror (planar_mirror.wgsl: such emission is that strategy's alone).
-    let through_mirrors = connects() && frame.planar_mirror_count > 0u;
+    let through_mirrors = takes_mirror_light(connects());
     var previous_diffuse = false;
     var by_a_mirror = false;
 

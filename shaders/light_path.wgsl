@@ -1,7 +1,7 @@
 // The light pass of light tracing, BDPT, SPPM and VCM: `src/cpu/light_path.rs` again, with the
 // same names, steps and step comments. One light subpath per invocation, its non-specular
 // vertices (the light point included) splatted into the pixels that see them (t = 1; not for
-// SPPM) and, but for light tracing, stored in the pool for the camera pass; for BDPT and VCM a
+// SPPM) and, but for light tracing, stored in the pool for the camera pass; for BDPT, a
 // subpath whose first hit is a planar mirror ends at the diffuse vertex after it (next-event
 // estimation through the mirror takes those paths: planar_mirror.wgsl). Here each splat's
 // visibility ray is traced where it is met; the CPU traces a chunk's splat rays together in SIMD
@@ -117,9 +117,9 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     var ray = Ray(offset_ray_origin(light.p, light.p_err, light.n, emission.dir), emission.dir);
     var bounce = 0u;
     // Next-event estimation through planar mirrors takes the paths whose light end is the light
-    // point, a planar mirror and a diffuse vertex (BDPT, VCM; planar_mirror.wgsl): the primitive
-    // of this subpath's first hit tells.
-    let through_mirrors = (frame.method == METHOD_BDPT || frame.method == METHOD_VCM) && frame.planar_mirror_count > 0u;
+    // point, a planar mirror and a diffuse vertex (BDPT; planar_mirror.wgsl): the primitive of
+    // this subpath's first hit tells.
+    let through_mirrors = takes_mirror_light(frame.method == METHOD_BDPT || frame.method == METHOD_VCM);
     var first_prim = PRIM_PADDING;
 
     loop {

@@ -8,6 +8,13 @@
 // Marks a triangle on no planar mirror (Triangle::planar_mirror).
 const NO_PLANAR_MIRROR: u32 = 0xffffffffu;
 
+// Whether the method takes next-event estimation through planar mirrors: one that `connects`
+// (BDPT's strategies) and does not merge, in a scene with planar mirrors: BDPT, and vcm with the
+// radius 0 (`takes_mirror_light` in src/planar_mirror.rs says why not VCM that merges).
+fn takes_mirror_light(connects: bool) -> bool {
+    return connects && !merges() && frame.planar_mirror_count > 0u;
+}
+
 // The planar mirror that primitive `prim` (a SurfaceHit's) is part of, or NO_PLANAR_MIRROR.
 fn planar_mirror_of(prim: u32) -> u32 {
     if frame.planar_mirror_count == 0u || (prim & PRIM_SPHERE_BIT) != 0u {

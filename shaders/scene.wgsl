@@ -129,7 +129,7 @@ struct Frame {
     // How many of planar_mirrors the scene has.
     planar_mirror_count: u32,
     pad: u32,
-    // The scene's planar mirrors, for next-event estimation through them (BDPT, VCM).
+    // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }
 

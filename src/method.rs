@@ -12,16 +12,17 @@ pub enum Method {
     /// nothing through mirrors or glass: surfaces seen only that way stay black.
     Light,
     /// Bidirectional path tracing (`src/cpu/bdpt.rs`): every connection of a camera subpath and
-    /// a light subpath, weighed by MIS.
+    /// a light subpath, weighed by MIS, and next-event estimation through planar mirrors (the
+    /// light's mirror image).
     Bdpt,
     /// Stochastic progressive photon mapping (`src/cpu/bdpt.rs` in its photon-mapping mode):
     /// each camera subpath follows mirrors and glass to its first diffuse vertex and gathers
     /// the photons (light vertices) of the iteration within a radius that shrinks over
     /// iterations. Consistent, not unbiased: the bias vanishes as the radius does.
     Sppm,
-    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies and
-    /// photon merging at every diffuse camera vertex, all weighed by MIS. Consistent, not
-    /// unbiased.
+    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies (but
+    /// next-event estimation through planar mirrors) and photon merging at every diffuse camera
+    /// vertex, all weighed by MIS. Consistent, not unbiased.
     Vcm,
 }
 

@@ -24,7 +24,8 @@
 //! next-event estimation is the strategy the power heuristic gives most of the weight anyway;
 //! where the light's image is close to the vertex, the BSDF sampling it replaces would have
 //! done better. Paths without that light end keep their weights over the other strategies.
-//! Path tracing (the unbiased reference), light tracing and SPPM do not take this strategy.
+//! BDPT takes this strategy ([`takes_mirror_light`]); VCM that merges, path tracing (the
+//! unbiased reference), light tracing and SPPM do not.
 //!
 //! A planar mirror is the set of the scene's mirror triangles of one material in one plane,
 //! found once ([`find`]), which also marks each triangle with its plane
@@ -141,6 +142,17 @@ pub fn in_plane(plane: &PlanarMirror, t: &Triangle) -> bool {
 fn triangle_bounds(t: &Triangle) -> (Vec3, Vec3) {
     let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
     (a.min(b).min(c), a.max(b).max(c))
+}
+
+/// Whether a method takes next-event estimation through planar mirrors: one that `connects`
+/// (BDPT's strategies) and does not `merge`, in a scene with planar mirrors. So BDPT does, and
+/// vcm with the radius 0, which is BDPT. VCM that merges does not: its merges at the diffuse
+/// vertex after the mirror already take that light with little noise, and on 2 cores the
+/// strategy's closest-hit rays cost about what its lower variance saves (docs/performance.md);
+/// nor do path tracing, light tracing and SPPM.
+#[inline]
+pub fn takes_mirror_light(connects: bool, merges: bool, scene: &FlatScene) -> bool {
+    connects && !merges && !scene.planar_mirrors.is_empty()
 }
 
 /// The planar mirror that primitive `prim` (a `SurfaceHit::prim`) is part of, if any.

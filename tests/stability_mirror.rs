@@ -25,7 +25,7 @@
 //! closed; the same check finds the 4 open edges of the room without its mirror wall), and the
 //! mirrored light still faces down.
 //!
-//! BDPT and VCM take the light that reaches the walls from the mirror by next-event estimation
+//! BDPT takes the light that reaches the walls from the mirror by next-event estimation
 //! through it (`planar_mirror`): in the doubled room that is ordinary next-event estimation of
 //! the mirrored light. BDPT renders the two scenes (and the tinted pair) the same, with the same
 //! statistic at 1024 iterations; the mirror's light counted twice is rejected.

@@ -5,8 +5,8 @@
 //! traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light
 //! pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
 //! strategy that can make its path (`crate::subpath`), so the sum over strategies is unbiased.
-//! Where the scene has planar mirrors, next-event estimation also aims at the light's image in
-//! each (step 4b), and the paths it makes are its alone, a partition of the weights
+//! Where the scene has planar mirrors, BDPT's next-event estimation also aims at the light's
+//! image in each (step 4b), and the paths it makes are its alone, a partition of the weights
 //! (`crate::planar_mirror`).
 //! The visibility rays of next-event estimation and of the connections are rouletted by their
 //! contribution (`subpath::shadow_survival`).
@@ -42,7 +42,7 @@ use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::packet::occluded_all;
-use crate::planar_mirror::{image, planar_mirror_of};
+use crate::planar_mirror::{image, planar_mirror_of, takes_mirror_light};
 use crate::sampling::{
     dim_bsdf, dim_connection, dim_light, dim_merge, dim_mirror, Sampler, DIM_CAMERA,
 };
@@ -214,10 +214,10 @@ impl CameraPass<'_> {
         // Product of etap² over refractions, for Russian roulette (as in path.rs).
         let mut eta_scale = 1.0f32;
         let mut bounce = 0u32;
-        // Next-event estimation through planar mirrors (BDPT, VCM): whether the vertex before
+        // Next-event estimation through planar mirrors (BDPT): whether the vertex before
         // this one was diffuse, and whether this one was reached from a diffuse vertex by way
         // of a planar mirror (`planar_mirror`: such emission is that strategy's alone).
-        let through_mirrors = self.connects && !scene.planar_mirrors.is_empty();
+        let through_mirrors = takes_mirror_light(self.connects, self.photons.is_some(), scene);
         let mut previous_diffuse = false;
         let mut by_a_mirror = false;
 

@@ -1,7 +1,7 @@
 //! The light pass of light tracing and BDPT: one light subpath, traced from an emitter, each of
 //! its non-specular vertices (the light point included) connected to the pinhole camera and
 //! splatted into the pixel that sees it (the strategies with t = 1), and, for BDPT, stored for
-//! the camera pass to connect to. For BDPT and VCM a subpath whose first hit is a planar mirror
+//! the camera pass to connect to. For BDPT, a subpath whose first hit is a planar mirror
 //! ends at the diffuse vertex after it: every path through that vertex is next-event estimation's
 //! through the mirror (`crate::planar_mirror`).
 //!
@@ -30,7 +30,7 @@ use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING}
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
 use crate::packet::occluded_all;
-use crate::planar_mirror::starts_by_a_mirror;
+use crate::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
 use crate::splat::Splats;
 use crate::subpath::{
@@ -52,8 +52,8 @@ pub fn is_diffuse(material: &Material) -> bool {
 pub enum LightPassMode {
     /// Light tracing: splats weighted 1, nothing stored.
     LightTracing,
-    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored (but for those that the
-    /// light reaches from a planar mirror, and their successors: `planar_mirror`).
+    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored (BDPT: but for those that
+    /// the light reaches from a planar mirror, and their successors: `planar_mirror`).
     Bidirectional,
     /// SPPM: diffuse vertices stored as photons, nothing splatted.
     PhotonMapping,
@@ -74,6 +74,8 @@ pub struct LightPass<'a> {
     /// Merging's constants in the MIS weights of this iteration (`MergeMis::NONE` but for VCM
     /// and SPPM).
     pub merge: MergeMis,
+    /// Whether this iteration merges (a radius above 0: SPPM, VCM).
+    pub merges: bool,
 }
 
 /// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU
@@ -225,8 +227,11 @@ impl LightPass<'_> {
         // Next-event estimation through planar mirrors takes the paths whose light end is the
         // light point, a planar mirror and a diffuse vertex (BDPT, VCM; `planar_mirror`): the
         // primitive of this subpath's first hit tells.
-        let through_mirrors =
-            self.mode == LightPassMode::Bidirectional && !scene.planar_mirrors.is_empty();
+        let through_mirrors = takes_mirror_light(
+            self.mode == LightPassMode::Bidirectional,
+            self.merges,
+            scene,
+        );
         let mut first_prim = PRIM_PADDING;
 
         loop {

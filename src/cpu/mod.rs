@@ -196,6 +196,7 @@ pub fn render_iterations(
             camera_subpaths: &buffers.camera_subpaths,
             shadow_threshold: buffers.shadow_threshold,
             merge,
+            merges: radius > 0.0,
         };
         // The light pass: every light subpath, in chunks; the chunks' vertices are joined in
         // subpath order.

@@ -62,7 +62,7 @@ pub struct Faults {
     /// VCM: merge queries rouletted (`subpath::merge_survival`) but not divided by their
     /// survival probability (false when correct).
     pub merge_rr_undivided: bool,
-    /// BDPT and VCM (the CPU): the light that reaches a diffuse vertex from a planar mirror is
+    /// BDPT (the CPU): the light that reaches a diffuse vertex from a planar mirror is
     /// taken by next-event estimation through the mirror and also, with the weights of the
     /// other strategies, by those (the emission a camera subpath meets in the mirror, the
     /// light subpath's vertices from that diffuse vertex on): counted about twice (false when

@@ -75,7 +75,7 @@ pub struct Frame {
     /// How many of `planar_mirrors` the scene has (`planar_mirror::find`).
     pub planar_mirror_count: u32,
     pub pad: u32,
-    /// The scene's planar mirrors, for next-event estimation through them (BDPT, VCM).
+    /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
 
