@@ -4,9 +4,9 @@
 // (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
 // rouletted by its contribution; BDPT's next-event estimation also aims at the light's image in
-// each planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With photons, the camera pass of the merging methods: VCM adds
-// the merges at every diffuse vertex (hash_grid.wgsl), SPPM merges at the first diffuse vertex
-// alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
+// each planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With
+// photons, the camera pass of the merging methods: VCM adds the merges at every diffuse vertex
+// (hash_grid.wgsl), SPPM merges at the first diffuse vertex alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
 // rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
 // then sums each subpath's terms in the order met, which gives the same sums.
 

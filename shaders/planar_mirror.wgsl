@@ -5,6 +5,10 @@
 // light point, a planar mirror and a diffuse vertex, which keeps the estimate unbiased. The host
 // finds the planar mirrors and marks each triangle with its plane (`Triangle::planar_mirror`).
 
+// The slack of `image`'s bounds test beyond the plane's tolerance, per unit of the magnitudes m is
+// computed from (|x| and |y' - x|): 16 f32 epsilons, 2^-19 (the closest-hit ray decides).
+const BOUNDS_SLACK: f32 = 1.9073486328125e-6;
+
 // Marks a triangle on no planar mirror (Triangle::planar_mirror).
 const NO_PLANAR_MIRROR: u32 = 0xffffffffu;
 
@@ -56,7 +60,8 @@ fn image(mirror: PlanarMirror, x: vec3<f32>, y: vec3<f32>, n_y: vec3<f32>) -> Mi
     r.n_image = n_y - 2.0 * dot(mirror.n, n_y) * mirror.n;
     // The segment x y' crosses the plane where the signed distance goes from sx to -sy.
     let m = x + (r.y_image - x) * (sx / (sx + sy));
-    let slack = vec3<f32>(mirror.tolerance);
+    let scale = max_element(abs(x)) + max_element(abs(r.y_image - x));
+    let slack = vec3<f32>(mirror.tolerance + BOUNDS_SLACK * scale);
     r.found = all(m >= mirror.lo - slack) && all(m <= mirror.hi + slack);
     return r;
 }

@@ -55,8 +55,8 @@ fn dim_merge(bounce: u32) -> u32 {
     return 0x58000000u + bounce;
 }
 
-// BDPT's and VCM's Russian roulette on the visibility ray of next-event estimation through planar
-// mirror i at camera bounce `bounce` (lane i; planar_mirror.wgsl).
+// BDPT's Russian roulette on the visibility ray of next-event estimation through planar mirror i
+// at camera bounce `bounce` (lane i; planar_mirror.wgsl).
 fn dim_mirror(bounce: u32) -> u32 {
     return 0x5C000000u + bounce;
 }

@@ -20,9 +20,10 @@ pub enum Method {
     /// the photons (light vertices) of the iteration within a radius that shrinks over
     /// iterations. Consistent, not unbiased: the bias vanishes as the radius does.
     Sppm,
-    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies (but
-    /// next-event estimation through planar mirrors) and photon merging at every diffuse camera
-    /// vertex, all weighed by MIS. Consistent, not unbiased.
+    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies (next-
+    /// event estimation through planar mirrors only with `--radius 0`, where vcm is bdpt) and
+    /// photon merging at every diffuse camera vertex, all weighed by MIS. Consistent, not
+    /// unbiased.
     Vcm,
 }
 

@@ -53,6 +53,13 @@ pub const PARALLEL: f32 = 1e-6;
 /// Marks a triangle on no planar mirror (`Triangle::planar_mirror`).
 pub const NO_PLANAR_MIRROR: u32 = u32::MAX;
 
+/// The slack of [`image`]'s bounds test beyond the plane's tolerance, per unit of the
+/// magnitudes m is computed from (|x| and |y' − x|): 16 f32 epsilons, 2^-19. The closest-hit
+/// ray decides whether m is on the mirror; this test only spares rays that cannot meet it, so
+/// it must never turn away a mirror point that rounding moved off a bounds box that is flat
+/// along the mirror's normal.
+pub const BOUNDS_SLACK: f32 = 1.0 / 524_288.0;
+
 /// How far from its plane a vertex may lie, in units of f32's epsilon times the largest
 /// coordinate of the scene's mirror triangles: a vertex given in f64 and rounded to f32 moves by
 /// half an ulp of its coordinates.
@@ -191,7 +198,8 @@ pub fn image(mirror: &PlanarMirror, x: Vec3, y: Vec3, n_y: Vec3) -> Option<(Vec3
     let n_image = n_y - 2.0 * n.dot(n_y) * n;
     // The segment x y' crosses the plane where the signed distance goes from sx to −sy.
     let m = x + (y_image - x) * (sx / (sx + sy));
-    let slack = Vec3::splat(mirror.tolerance);
+    let scale = x.abs().max_element() + (y_image - x).abs().max_element();
+    let slack = Vec3::splat(mirror.tolerance + BOUNDS_SLACK * scale);
     let inside = m.cmpge(Vec3::from(mirror.lo) - slack).all()
         && m.cmple(Vec3::from(mirror.hi) + slack).all();
     inside.then_some((y_image, n_image))
@@ -260,6 +268,38 @@ mod tests {
             };
             assert_eq!(t.planar_mirror, expected, "triangle {k}");
         }
+    }
+
+    #[test]
+    fn a_mirror_small_beside_the_scenes_coordinates_keeps_its_images() {
+        // A mirror 0.1 wide at the origin (plane y = 0, tolerance ~4e-7), seen from points
+        // tens of units away by way of mirror points well inside it: rounding moves the
+        // computed m off the plane by about an ulp of those coordinates (~2e-6), which the
+        // bounds test must allow.
+        let t = Triangle::new([0.0, 0.0, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], 0);
+        let u = Triangle::new([0.0, 0.0, 0.0], [0.1, 0.0, 0.1], [0.1, 0.0, 0.0], 0);
+        let mut triangles = [t, u];
+        let mirror = find(&mut triangles, &mirror_material())[0];
+        let mut state = 12345u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / 16_777_216.0
+        };
+        let mut kept = 0;
+        for _ in 0..10_000 {
+            let m = Vec3::new(0.01 + 0.08 * next(), 0.0, 0.01 + 0.08 * next());
+            let x = Vec3::new(
+                40.0 * next() - 20.0,
+                5.0 + 30.0 * next(),
+                40.0 * next() - 20.0,
+            );
+            // The light point on the reflected ray from m.
+            let d = (m - x).normalize();
+            let reflected = Vec3::new(d.x, -d.y, d.z);
+            let y = m + reflected * (5.0 + 30.0 * next());
+            kept += usize::from(image(&mirror, x, y, -reflected).is_some());
+        }
+        assert_eq!(kept, 10_000);
     }
 
     #[test]

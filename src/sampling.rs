@@ -93,7 +93,7 @@ pub fn dim_splat(bounce: u32) -> u32 {
 pub fn dim_merge(bounce: u32) -> u32 {
     0x5800_0000u32.wrapping_add(bounce)
 }
-/// BDPT's and VCM's Russian roulette on the visibility ray of next-event estimation through
+/// BDPT's Russian roulette on the visibility ray of next-event estimation through
 /// planar mirror `i` at camera bounce `bounce` (lane `i`; `crate::planar_mirror`).
 #[inline]
 pub fn dim_mirror(bounce: u32) -> u32 {

@@ -5,9 +5,9 @@
 //! A full path x0 (the pinhole) … xk (on an emitter) can be sampled by several strategies: s of
 //! its vertices from a light subpath and t = k + 1 − s from a camera subpath, joined by one
 //! connection. BDPT takes every strategy that can make the path and weighs each with the
-//! power heuristic (but for the paths whose light end is a light point, a planar mirror and a
-//! diffuse vertex, which next-event estimation through the mirror takes alone:
-//! `crate::planar_mirror`) (β = 2, Veach's thesis eq. 9.13), w_s = (n_s p_s)² / Σ_i (n_i p_i)², where
+//! power heuristic (β = 2, Veach's thesis eq. 9.13; but for the paths whose light end is a
+//! light point, a planar mirror and a diffuse vertex, which next-event estimation through the
+//! mirror takes alone: `crate::planar_mirror`), w_s = (n_s p_s)² / Σ_i (n_i p_i)², where
 //! p_i is the area-measure density of the whole path under strategy i and n_i the number of
 //! samples strategy i takes per pixel and iteration: N (the number of light subpaths) for t = 1,
 //! whose light subpaths may land in any pixel, and for the others n_c(j), the camera subpaths

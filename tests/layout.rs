@@ -217,7 +217,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         PRIM_PADDING, PRIM_SPHERE_BIT,
     };
     use hexray::gpu::bidirectional::SCAN_BLOCK;
-    use hexray::planar_mirror::{MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
+    use hexray::planar_mirror::{BOUNDS_SLACK, MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
     use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::splat::FRACTION_BITS;
     use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -234,6 +234,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         PRIM_PADDING,
         MAX_PLANAR_MIRRORS,
         NO_PLANAR_MIRROR,
+        BOUNDS_SLACK,
         EMPTY_SLOT,
         NO_VERTEX,
         DIM_CAMERA,

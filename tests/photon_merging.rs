@@ -366,7 +366,11 @@ fn gpu_bdpt_equals_cpu_on_the_same_streams_through_planar_mirrors() {
         initial: 0.0,
         alpha: 0.75,
     };
-    for rel in ["scenes/tncg15_room.json", "scenes/glass_room.json"] {
+    for (rel, mirrors) in [
+        ("scenes/tncg15_room.json", 1),
+        ("scenes/glass_room.json", 2),
+    ] {
+        assert_eq!(load(rel).1.planar_mirrors.len(), mirrors, "{rel}");
         if let Some(n) = same_streams_at(rel, Method::Vcm, off, Faults::NONE) {
             assert!(n <= FLIPPED_PIXELS_ALLOWED, "{rel}: {n} pixels differ");
         }

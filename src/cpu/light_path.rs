@@ -52,8 +52,9 @@ pub fn is_diffuse(material: &Material) -> bool {
 pub enum LightPassMode {
     /// Light tracing: splats weighted 1, nothing stored.
     LightTracing,
-    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored (BDPT: but for those that
-    /// the light reaches from a planar mirror, and their successors: `planar_mirror`).
+    /// BDPT and VCM: splats weighted by MIS, diffuse vertices stored (BDPT: but for a subpath
+    /// whose first hit is a planar mirror, none from the diffuse vertex after it on:
+    /// `planar_mirror`).
     Bidirectional,
     /// SPPM: diffuse vertices stored as photons, nothing splatted.
     PhotonMapping,
@@ -225,7 +226,7 @@ impl LightPass<'_> {
         };
         let mut bounce = 0u32;
         // Next-event estimation through planar mirrors takes the paths whose light end is the
-        // light point, a planar mirror and a diffuse vertex (BDPT, VCM; `planar_mirror`): the
+        // light point, a planar mirror and a diffuse vertex (BDPT; `planar_mirror`): the
         // primitive of this subpath's first hit tells.
         let through_mirrors = takes_mirror_light(
             self.mode == LightPassMode::Bidirectional,
