@@ -273,7 +273,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
         if max_element(throughput) <= 0.0 || depth >= max_edges {
             break;
         }
-        by_a_mirror = through_mirrors && previous_diffuse && planar_mirror_of(hit.prim) != NO_PLANAR_MIRROR;
+        // The light end (emitter, this vertex, the one before) that the partition gives to step
+        // 4b: the predicate the light pass applies to its first two hits.
+        by_a_mirror = through_mirrors && starts_by_a_mirror(hit.prim, previous_diffuse);
         previous_diffuse = diffuse;
         ray = Ray(offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi), bs.wi);
 

@@ -42,7 +42,7 @@ use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::packet::occluded_all;
-use crate::planar_mirror::{image, planar_mirror_of, takes_mirror_light};
+use crate::planar_mirror::{image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{
     dim_bsdf, dim_connection, dim_light, dim_merge, dim_mirror, Sampler, DIM_CAMERA,
 };
@@ -463,10 +463,11 @@ impl CameraPass<'_> {
             if throughput.max_element() <= 0.0 || depth >= max_edges {
                 break;
             }
+            // The light end (emitter, this vertex, the one before) that the partition gives to
+            // step 4b: the predicate the light pass applies to its first two hits.
             by_a_mirror = through_mirrors
                 && !faults.mirror_light_twice
-                && previous_diffuse
-                && planar_mirror_of(scene, hit.prim).is_some();
+                && starts_by_a_mirror(scene, hit.prim, previous_diffuse);
             previous_diffuse = diffuse;
             ray = Ray {
                 o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
