@@ -30,7 +30,7 @@
 //! the mirrored light. BDPT renders the two scenes (and the tinted pair) the same, with the same
 //! statistic at 1024 iterations; the mirror's light counted twice is rejected.
 
-use crate::common::parity::{parity, render_cpu_shared, Parity};
+use crate::common::parity::{parity, render_cpu_method_shared, render_cpu_shared, Parity};
 use crate::common::*;
 use crate::stability_far_from_origin::{
     room_reference, DARK_MIRROR, DARK_MIRROR_SEED, GPU_SPP, POWERFUL_SPP, ROOM, ROOM_SEED, SIZE,
@@ -123,7 +123,8 @@ const BDPT_ITERATIONS: u32 = 1024;
 /// next-event estimation; other seeds.
 fn bdpt_room_against_doubled(rel: &str, doubled: &str, faults: Faults) -> Parity {
     let room = render_cpu_method(rel, SIZE, SIZE, BDPT_ITERATIONS, 125, Method::Bdpt, faults);
-    let doubled = render_cpu_method(
+    // Shared: the planted fault's test compares against the same render of the doubled room.
+    let doubled = render_cpu_method_shared(
         doubled,
         SIZE,
         SIZE,

@@ -3,6 +3,7 @@
 
 use hexray::cpu::Faults;
 use hexray::film::Film;
+use hexray::method::Method;
 use hexray::stats::{welch_blocks, MeanImage};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -83,6 +84,20 @@ pub fn render_cpu_shared(
     seed: u32,
     faults: Faults,
 ) -> Arc<Film> {
+    render_cpu_method_shared(rel, width, height, spp, seed, Method::Path, faults)
+}
+
+/// [`super::render_cpu_method`], shared as [`render_cpu_shared`] is: a render that several
+/// tests compare against (their planted faults on the other side) is rendered once.
+pub fn render_cpu_method_shared(
+    rel: &str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    faults: Faults,
+) -> Arc<Film> {
     static CACHE: OnceLock<Cache> = OnceLock::new();
     let key = (
         rel.to_string(),
@@ -90,7 +105,7 @@ pub fn render_cpu_shared(
         height,
         spp,
         seed,
-        format!("{faults:?}"),
+        format!("{method:?} {faults:?}"),
     );
     let cell = CACHE
         .get_or_init(Default::default)
@@ -99,6 +114,10 @@ pub fn render_cpu_shared(
         .entry(key)
         .or_default()
         .clone();
-    cell.get_or_init(|| Arc::new(super::render_cpu(rel, width, height, spp, seed, faults)))
-        .clone()
+    cell.get_or_init(|| {
+        Arc::new(super::render_cpu_method(
+            rel, width, height, spp, seed, method, faults,
+        ))
+    })
+    .clone()
 }
