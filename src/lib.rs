@@ -21,6 +21,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod hash_grid;
 pub mod interrupt;
+pub mod lanes;
 pub mod light;
 pub mod merge;
 pub mod merging;

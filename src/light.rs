@@ -10,7 +10,7 @@ use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
 /// A point on an emitter, chosen for next-event estimation.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct LightSample {
     pub p: Vec3,
     pub p_err: Vec3,

@@ -4,7 +4,9 @@
 //! order and the same step comments; read the two side by side. One difference of schedule: the
 //! shader traces step 4's shadow ray where it is made, while here `shade_hit` hands it out
 //! ([`NextEvent`]) so that [`trace_pixels`] can trace a round's shadow rays together; its light
-//! is added before the next bounce's, the same sum in the same order.
+//! is added before the next bounce's, the same sum in the same order. And `trace_pixels` shades
+//! a round's diffuse hits eight at a time in SIMD lanes (`shade_diffuse_lanes`): `shade_hit`'s
+//! arithmetic, operation for operation, so each path is the same bit for bit.
 //!
 //! The estimator is unidirectional path tracing with next-event estimation and multiple
 //! importance sampling (Veach's thesis, ch. 9): at each diffuse vertex, direct light is
@@ -20,6 +22,8 @@ use crate::camera::Camera;
 use crate::film::PixelStats;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
+use crate::lanes::{self, F8, LANES, U8, V8};
+use crate::light::LightSample;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
 use crate::packet::{intersect_closest_all, occluded_all};
 use crate::sampling::{
@@ -117,7 +121,8 @@ pub fn trace_path(
 /// The samples `first..first + count` of each pixel `(index, x, y)` of `pixels`, added in
 /// sample order to its `stats`: [`trace_path`] for every sample, run as a wavefront. Every
 /// pixel has one path in flight; each round traces all their closest-hit rays, eight to a
-/// packet where the tree is small ([`intersect_closest_all`]), shades each hit (steps 3 to 6),
+/// packet where the tree is small ([`intersect_closest_all`]), shades each hit (steps 3 to 6;
+/// diffuse hits eight at a time in SIMD lanes, the rest one by one),
 /// traces all the shadow rays of next-event estimation in packets ([`occluded_all`]) and adds
 /// what they let through; a path that ended hands its pixel to the pixel's next sample (path
 /// regeneration, as the shader's `render`). Each sample is the same path as `trace_path`'s,
@@ -157,6 +162,8 @@ pub fn trace_pixels(
     let mut events = Vec::new();
     let mut event_ends = Vec::with_capacity(pixels.len());
     let mut going_on = Vec::with_capacity(pixels.len());
+    let mut shaded: Vec<Option<Shaded>> = Vec::with_capacity(pixels.len());
+    let mut batch = Vec::with_capacity(LANES);
     let mut shadow_rays = Vec::new();
     let mut blocked = Vec::new();
     while !live.is_empty() {
@@ -172,20 +179,63 @@ pub fn trace_pixels(
         events.clear();
         event_ends.clear();
         going_on.clear();
-        for (&p, hit) in live.iter().zip(&hits) {
-            let (sample, path) = &mut flight[p];
-            let on = hit.as_ref().is_some_and(|hit| {
-                let sampler = Sampler::new(seed, pixels[p].0, *sample);
-                shade_hit(
+        // Diffuse hits with one shadow ray go eight at a time through the SIMD lanes of
+        // `shade_diffuse_lanes`, which computes `shade_hit`'s numbers for each; the others
+        // take `shade_hit` below, and the shadow rays are listed in path order.
+        shaded.clear();
+        shaded.resize(live.len(), None);
+        if light_samples <= 1 {
+            batch.clear();
+            for (j, hit) in hits.iter().enumerate() {
+                let Some(hit) = hit else { continue };
+                if scene.materials[hit.material as usize].kind != KIND_DIFFUSE {
+                    continue;
+                }
+                batch.push(j);
+                if batch.len() == LANES {
+                    shade_batch(
+                        scene,
+                        seed,
+                        pixels,
+                        (&live, &hits, &batch),
+                        &mut flight,
+                        faults,
+                        &mut shaded,
+                    );
+                    batch.clear();
+                }
+            }
+            if !batch.is_empty() {
+                shade_batch(
                     scene,
-                    path,
-                    hit,
-                    &sampler,
-                    light_samples,
+                    seed,
+                    pixels,
+                    (&live, &hits, &batch),
+                    &mut flight,
                     faults,
-                    &mut events,
-                )
-            });
+                    &mut shaded,
+                );
+            }
+        }
+        for (j, (&p, hit)) in live.iter().zip(&hits).enumerate() {
+            let on = if let Some(Shaded { event, going_on }) = shaded[j] {
+                events.extend(event);
+                going_on
+            } else {
+                let (sample, path) = &mut flight[p];
+                hit.as_ref().is_some_and(|hit| {
+                    let sampler = Sampler::new(seed, pixels[p].0, *sample);
+                    shade_hit(
+                        scene,
+                        path,
+                        hit,
+                        &sampler,
+                        light_samples,
+                        faults,
+                        &mut events,
+                    )
+                })
+            };
             going_on.push(on);
             event_ends.push(events.len());
         }
@@ -221,6 +271,184 @@ pub fn trace_pixels(
             *path = start_path(camera, x, y, &Sampler::new(seed, index, *sample));
             true
         });
+    }
+}
+
+/// What a diffuse hit shaded in lanes hands back: its shadow ray, and whether its path goes
+/// on.
+#[derive(Clone, Copy, Debug)]
+struct Shaded {
+    event: Option<NextEvent>,
+    going_on: bool,
+}
+
+/// [`shade_diffuse_lanes`] for a round's diffuse hits `batch` (at most [`LANES`] indices into
+/// the round's `live` paths and their `hits`), each one's result in `shaded` at its index; the
+/// lanes past the batch's end repeat its first hit, and their results are dropped.
+#[inline]
+fn shade_batch(
+    scene: &FlatScene,
+    seed: u32,
+    pixels: &[(u32, u32, u32)],
+    (live, hits, batch): (&[usize], &[Option<SurfaceHit>], &[usize]),
+    flight: &mut [(u32, PathState)],
+    faults: Faults,
+    shaded: &mut [Option<Shaded>],
+) {
+    let j = |l: usize| batch[l.min(batch.len() - 1)];
+    let hit = |l: usize| hits[j(l)].as_ref().expect("a diffuse hit");
+    let mut lane_hits = [hit(0); LANES];
+    let mut paths = [flight[live[j(0)]].1; LANES];
+    for l in 1..LANES {
+        lane_hits[l] = hit(l);
+        paths[l] = flight[live[j(l)]].1;
+    }
+    let pixel = lanes::uints(|l| pixels[live[j(l)]].0);
+    let sample = lanes::uints(|l| flight[live[j(l)]].0);
+    let mut lane_events = [None; LANES];
+    let mut on = [false; LANES];
+    shade_diffuse_lanes(
+        scene,
+        seed,
+        pixel,
+        sample,
+        &lane_hits,
+        &mut paths,
+        faults,
+        &mut lane_events,
+        &mut on,
+    );
+    for (l, &k) in batch.iter().enumerate() {
+        flight[live[k]].1 = paths[l];
+        shaded[k] = Some(Shaded {
+            event: lane_events[l],
+            going_on: on[l],
+        });
+    }
+}
+
+/// Steps 3 to 6 of [`shade_hit`] at eight diffuse hits at once, each with one shadow ray, the
+/// arithmetic in SIMD lanes ([`crate::lanes`]): lane l shades `paths[l]` at `hits[l]` with the
+/// numbers of stream (`pixel[l]`, `sample[l]`), puts its shadow ray in `events[l]` and says in
+/// `going_on[l]` whether its path goes on, bit for bit what `shade_hit` does (a test below).
+/// Step 3 adds nothing at a surface that does not emit, so it is left out.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn shade_diffuse_lanes(
+    scene: &FlatScene,
+    seed: u32,
+    pixel: U8,
+    sample: U8,
+    hits: &[&SurfaceHit; LANES],
+    paths: &mut [PathState; LANES],
+    faults: Faults,
+    events: &mut [Option<NextEvent>; LANES],
+    going_on: &mut [bool; LANES],
+) {
+    let bounce = lanes::uints(|l| paths[l].bounce);
+    let (p, p_err, n) = (
+        V8::gather(|l| hits[l].p),
+        V8::gather(|l| hits[l].p_err),
+        V8::gather(|l| hits[l].n),
+    );
+    let wo = V8::gather(|l| paths[l].ray.d).neg();
+    let albedo = V8::gather(|l| Vec3::from(scene.materials[hits[l].material as usize].color));
+    let throughput = V8::gather(|l| paths[l].throughput);
+    let facing = n.neg_where(n.dot(&wo).simd_lt(F8::ZERO));
+
+    // Step 4 - next-event estimation, one light sample (`shade_hit`'s step 4 with N = 1).
+    let bounce_dims = bounce.to_array();
+    let u_light = lanes::draw4(
+        seed,
+        pixel,
+        sample,
+        lanes::uints(|l| dim_light(bounce_dims[l])),
+    );
+    let u = u_light.map(|row| row.to_array());
+    let mut ls = [LightSample::default(); LANES];
+    for (l, s) in ls.iter_mut().enumerate() {
+        *s = sample_emitter(scene, u[0][l], u[1][l], u[2][l]);
+    }
+    let (ls_p, ls_p_err, ls_n, ls_le) = (
+        V8::gather(|l| ls[l].p),
+        V8::gather(|l| ls[l].p_err),
+        V8::gather(|l| ls[l].n),
+        V8::gather(|l| ls[l].le),
+    );
+    let to_light = ls_p.sub(&p);
+    let dist2 = to_light.dot(&to_light);
+    let wi = to_light.div(dist2.sqrt());
+    let cos_s = facing.dot(&wi);
+    let cos_l = ls_n.dot(&wi) ^ F8::splat(-0.0);
+    let origin = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
+    let light_point = lanes::offset_ray_origin(&ls_p, &ls_p_err, &ls_n, &wi.neg());
+    let shadow_d = light_point.sub(&origin);
+    let light_pdf = lanes::floats(|l| ls[l].pdf_area) * dist2 / cos_l.abs();
+    let f = albedo.scale(F8::splat(FRAC_1_PI));
+    // The power heuristic against BSDF sampling, as `power_heuristic`.
+    let (f2, g) = (light_pdf * light_pdf, cos_s * F8::splat(FRAC_1_PI));
+    let sum = f2 + g * g;
+    let w = sum.simd_gt(F8::ZERO).select(f2 / sum, F8::ZERO);
+    let value = throughput.mul(&f).mul(&ls_le).scale(cos_s * w / light_pdf);
+    let clear =
+        (cos_s.simd_gt(F8::ZERO) & cos_l.simd_gt(F8::ZERO) & dist2.simd_gt(F8::ZERO)).to_bitmask();
+    let (origin, shadow_d, value) = (origin.lanes(), shadow_d.lanes(), value.lanes());
+    for l in 0..LANES {
+        events[l] = (clear & (1 << l) != 0).then(|| NextEvent {
+            ray: Ray {
+                o: origin[l],
+                d: shadow_d[l],
+            },
+            value: value[l],
+        });
+    }
+
+    // Step 5 - scattering: a cosine-weighted direction about the side wo lies on
+    // (`sample_bsdf`'s diffuse lobe); the throughput takes the albedo.
+    let u_bsdf = lanes::draw4(
+        seed,
+        pixel,
+        sample,
+        lanes::uints(|l| dim_bsdf(bounce_dims[l])),
+    );
+    let local = lanes::sample_cosine_hemisphere(u_bsdf[0], u_bsdf[1]);
+    let (t, b) = lanes::orthonormal_basis(&facing);
+    let wi = t
+        .scale(local.x)
+        .add(&b.scale(local.y))
+        .add(&facing.scale(local.z));
+    let pdf = (local.z * F8::splat(FRAC_1_PI)).to_array();
+    let throughput = throughput.mul(&albedo).lanes();
+    let ray_o = lanes::offset_ray_origin(&p, &p_err, &n, &wi).lanes();
+    let wi = wi.lanes();
+    let u_roulette = u_light[3].to_array();
+    for l in 0..LANES {
+        let path = &mut paths[l];
+        path.throughput = throughput[l];
+        if pdf[l] == 0.0 {
+            path.throughput *= faults.specular_scale;
+        }
+        path.bsdf_pdf = pdf[l];
+        if path.throughput.max_element() <= 0.0 {
+            going_on[l] = false;
+            continue;
+        }
+        path.ray = Ray {
+            o: ray_o[l],
+            d: wi[l],
+        };
+
+        // Step 6 - Russian roulette, as in `shade_hit`.
+        if path.bounce >= RR_START_BOUNCE {
+            let q = (path.throughput.max_element() * path.eta_scale).min(RR_MAX_SURVIVAL);
+            if u_roulette[l] >= q {
+                going_on[l] = false;
+                continue;
+            }
+            path.throughput /= q;
+        }
+        path.bounce += 1;
+        going_on[l] = path.bounce < faults.max_bounces;
     }
 }
 
@@ -451,14 +679,15 @@ mod tests {
     use super::*;
     use crate::scene::Scene;
 
-    /// The paths `trace_pixels` traces together, eight to a packet, are `trace_path`'s one at a
-    /// time, bit for bit: every pixel's sums of a 13x11 block (not a multiple of the packet),
-    /// samples 3 to 10, on the rooms with mirrors, glass and spheres, with one and with two
-    /// shadow rays a vertex (`--light-samples`), and with the grey-indirect fault, whose
-    /// snapshot must come after the vertex's next-event light.
+    /// The paths `trace_pixels` traces together, eight to a packet and their diffuse hits
+    /// eight to a batch of lanes, are `trace_path`'s one at a time, bit for bit: every pixel's
+    /// sums of a 13x11 block (not a multiple of the packet), samples 3 to 10, on the rooms with
+    /// mirrors, glass and spheres and on the all-diffuse box, with one shadow ray a vertex (the
+    /// lanes) and with two (one by one), and with the grey-indirect fault, whose snapshot must
+    /// come after the vertex's next-event light.
     #[test]
     fn the_wavefront_traces_each_samples_own_path_bit_for_bit() {
-        for name in ["tncg15_room", "glass_room"] {
+        for name in ["tncg15_room", "glass_room", "cornell_box"] {
             let path = format!("{}/scenes/{name}.json", env!("CARGO_MANIFEST_DIR"));
             let scene = Scene::load(std::path::Path::new(&path)).expect("scene");
             let flat = FlatScene::build(&scene);

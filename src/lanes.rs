@@ -1,0 +1,439 @@
+//! Eight values in lanes: the arithmetic of a path vertex for eight paths at once.
+//!
+//! The scalar shading of a path vertex is a chain of dependent square roots, divisions and
+//! hashes whose latency, not its instruction count, bounds the path tracer
+//! (docs/performance.md). Eight independent paths side by side fill the vector units instead:
+//! each function here is its scalar namesake's arithmetic, operation for operation in the same
+//! order, written as a loop over the lanes of structure-of-arrays values, which the compiler
+//! turns into vector instructions. No operation is fused or reordered, so every lane's result
+//! is the scalar function's bit for bit (the tests below, on values that include zeros of both
+//! signs, subnormals and infinities where the scalar functions accept them).
+
+use glam::Vec3;
+use std::f32::consts::FRAC_PI_2;
+use wide::{f32x8, i32x8, u32x8};
+
+/// The number of lanes.
+pub const LANES: usize = 8;
+
+/// Eight floats.
+pub type F8 = f32x8;
+/// Eight unsigned integers.
+pub type U8 = u32x8;
+
+/// The sign bit in every lane: `x ^ SIGN` is −x, exactly as Rust's unary minus (a flip of
+/// the sign bit, −0 from +0 included).
+const SIGN: f32x8 = f32x8::splat(-0.0);
+
+/// Per lane, `if_true` where `mask` (a comparison's all-ones lanes), else `if_false`.
+#[inline(always)]
+fn select(mask: f32x8, if_true: f32x8, if_false: f32x8) -> f32x8 {
+    mask.select(if_true, if_false)
+}
+
+/// A float mask as integer lanes.
+#[inline(always)]
+fn bits(x: f32x8) -> u32x8 {
+    bytemuck::cast(x)
+}
+
+/// Eight lanes of `f(l)`.
+#[inline(always)]
+pub fn floats(f: impl Fn(usize) -> f32) -> F8 {
+    let mut out = [0.0; LANES];
+    for (l, o) in out.iter_mut().enumerate() {
+        *o = f(l);
+    }
+    f32x8::new(out)
+}
+
+/// Eight lanes of `f(l)`.
+#[inline(always)]
+pub fn uints(f: impl Fn(usize) -> u32) -> U8 {
+    let mut out = [0; LANES];
+    for (l, o) in out.iter_mut().enumerate() {
+        *o = f(l);
+    }
+    u32x8::new(out)
+}
+
+/// Eight 3-vectors as three rows of eight coordinates.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct V8 {
+    pub x: F8,
+    pub y: F8,
+    pub z: F8,
+}
+
+impl V8 {
+    /// The vectors `v(l)` in lanes.
+    #[inline(always)]
+    pub fn gather(v: impl Fn(usize) -> Vec3) -> V8 {
+        let (mut x, mut y, mut z) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            let w = v(l);
+            (x[l], y[l], z[l]) = (w.x, w.y, w.z);
+        }
+        V8 {
+            x: f32x8::new(x),
+            y: f32x8::new(y),
+            z: f32x8::new(z),
+        }
+    }
+
+    /// The lanes as eight vectors.
+    #[inline(always)]
+    pub fn lanes(&self) -> [Vec3; LANES] {
+        let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
+        let mut out = [Vec3::ZERO; LANES];
+        for l in 0..LANES {
+            out[l] = Vec3::new(x[l], y[l], z[l]);
+        }
+        out
+    }
+
+    #[inline(always)]
+    pub fn add(&self, o: &V8) -> V8 {
+        V8 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    #[inline(always)]
+    pub fn sub(&self, o: &V8) -> V8 {
+        V8 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    /// Coordinate by coordinate (glam's `Vec3 * Vec3`).
+    #[inline(always)]
+    pub fn mul(&self, o: &V8) -> V8 {
+        V8 {
+            x: self.x * o.x,
+            y: self.y * o.y,
+            z: self.z * o.z,
+        }
+    }
+
+    /// Each lane's vector times that lane's scalar (glam's `f32 * Vec3`, `Vec3 * f32`).
+    #[inline(always)]
+    pub fn scale(&self, s: F8) -> V8 {
+        V8 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+
+    /// Each lane's vector divided by that lane's scalar (glam's `Vec3 / f32`).
+    #[inline(always)]
+    pub fn div(&self, s: F8) -> V8 {
+        V8 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+
+    /// Negated in the lanes of `mask` (glam's `-v`, chosen per lane).
+    #[inline(always)]
+    pub fn neg_where(&self, mask: F8) -> V8 {
+        let flip = mask & SIGN;
+        V8 {
+            x: self.x ^ flip,
+            y: self.y ^ flip,
+            z: self.z ^ flip,
+        }
+    }
+
+    /// −v in every lane.
+    #[inline(always)]
+    pub fn neg(&self) -> V8 {
+        V8 {
+            x: self.x ^ SIGN,
+            y: self.y ^ SIGN,
+            z: self.z ^ SIGN,
+        }
+    }
+
+    #[inline(always)]
+    pub fn abs(&self) -> V8 {
+        V8 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+
+    /// glam's `Vec3::dot`: (x·x') + (y·y') + (z·z'), added left to right.
+    #[inline(always)]
+    pub fn dot(&self, o: &V8) -> F8 {
+        (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
+    }
+}
+
+/// [`crate::sampling::Sampler::draw4`] in lanes: block `dim` of the streams (`pixel`,
+/// `sample`, `seed`), as four rows of eight numbers.
+#[inline(always)]
+pub fn draw4(seed: u32, pixel: U8, sample: U8, dim: U8) -> [F8; 4] {
+    let v = pcg4d([pixel, sample, dim, u32x8::splat(seed)]);
+    // (x >> 8) < 2^24 converts exactly through i32, as `u32_to_unit_f32` converts it.
+    v.map(|row| {
+        let top: i32x8 = bytemuck::cast(row.unbounded_shr_scalar(8));
+        f32x8::from_i32x8(top) * f32x8::splat(1.0 / 16_777_216.0)
+    })
+}
+
+/// [`crate::sampling::pcg4d`] in lanes: row k holds the k-th input (and output) of each lane.
+#[inline(always)]
+fn pcg4d(v: [U8; 4]) -> [U8; 4] {
+    let (a, c) = (u32x8::splat(1_664_525), u32x8::splat(1_013_904_223));
+    let mut v = v.map(|x| x * a + c);
+    let round = |v: &mut [U8; 4]| {
+        v[0] += v[1] * v[3];
+        v[1] += v[2] * v[0];
+        v[2] += v[0] * v[1];
+        v[3] += v[1] * v[2];
+    };
+    round(&mut v);
+    v = v.map(|x| x ^ x.unbounded_shr_scalar(16));
+    round(&mut v);
+    v
+}
+
+/// [`crate::sampling::sin_cos_turns`] in lanes: (sin 2πu, cos 2πu).
+#[inline(always)]
+pub fn sin_cos_turns(u: F8) -> (F8, F8) {
+    let splat = f32x8::splat;
+    let q = (u * splat(4.0) + splat(0.5)).floor();
+    let x = (u * splat(4.0) - q) * splat(FRAC_PI_2);
+    let x2 = x * x;
+    let s = x + x
+        * x2
+        * (splat(-1.666_665_5e-1) + x2 * (splat(8.332_161e-3) + x2 * splat(-1.951_529_6e-4)));
+    let c = splat(1.0) - splat(0.5) * x2
+        + x2 * x2
+            * (splat(4.166_664_6e-2) + x2 * (splat(-1.388_731_6e-3) + x2 * splat(2.443_315_7e-5)));
+    // Quarter turn q: (s, c), (c, −s), (−s, −c), (−c, s).
+    let quarter = q.trunc_int() & i32x8::splat(3);
+    let odd: f32x8 = bytemuck::cast((quarter & i32x8::splat(1)).simd_eq(i32x8::splat(1)));
+    let half: f32x8 = bytemuck::cast((quarter & i32x8::splat(2)).simd_eq(i32x8::splat(2)));
+    let flip = half & SIGN;
+    let sin = select(odd, c, s) ^ flip;
+    let cos = select(odd, s ^ SIGN, c) ^ flip;
+    (sin, cos)
+}
+
+/// [`crate::sampling::sample_cosine_hemisphere`] in lanes.
+#[inline(always)]
+pub fn sample_cosine_hemisphere(u1: F8, u2: F8) -> V8 {
+    let r = u1.sqrt();
+    let (sin_phi, cos_phi) = sin_cos_turns(u2);
+    V8 {
+        x: r * cos_phi,
+        y: r * sin_phi,
+        z: (f32x8::splat(1.0) - u1).max(f32x8::ZERO).sqrt(),
+    }
+}
+
+/// [`crate::sampling::orthonormal_basis`] in lanes.
+#[inline(always)]
+pub fn orthonormal_basis(n: &V8) -> (V8, V8) {
+    let one = f32x8::splat(1.0);
+    let sign = select(n.z.simd_ge(f32x8::ZERO), one, -one);
+    let a = f32x8::splat(-1.0) / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t = V8 {
+        x: one + sign * n.x * n.x * a,
+        y: sign * b,
+        z: (sign ^ SIGN) * n.x,
+    };
+    let bt = V8 {
+        x: b,
+        y: sign + n.y * n.y * a,
+        z: n.y ^ SIGN,
+    };
+    (t, bt)
+}
+
+/// [`crate::geometry::offset_ray_origin`] in lanes.
+#[inline(always)]
+pub fn offset_ray_origin(p: &V8, p_err: &V8, n: &V8, w: &V8) -> V8 {
+    let d = n.abs().dot(p_err);
+    let offset = n.scale(d).neg_where(w.dot(n).simd_lt(f32x8::ZERO));
+    step_away(&p.add(&offset), &offset)
+}
+
+/// [`crate::geometry::step_away_scalar`] in lanes: each coordinate stepped one ulp the way its
+/// offset points, unchanged where the offset is 0 or NaN or the step would leave an infinity
+/// (the masks of [`crate::geometry::step_away`], eight lanes wide).
+#[inline(always)]
+pub fn step_away(po: &V8, offset: &V8) -> V8 {
+    V8 {
+        x: step_away_row(po.x, offset.x),
+        y: step_away_row(po.y, offset.y),
+        z: step_away_row(po.z, offset.z),
+    }
+}
+
+#[inline(always)]
+fn step_away_row(x: F8, s: F8) -> F8 {
+    let zero = f32x8::ZERO;
+    let up = bits(s.simd_gt(zero));
+    let down = bits(s.simd_lt(zero));
+    let x_bits = bits(x);
+    // ±0 steps from the bits of +0 (up) or −0 (down), as next_float_up/down take them.
+    let is_zero = bits(x.simd_eq(zero));
+    let zero_bits = down & u32x8::splat(0x8000_0000);
+    let base = (is_zero & zero_bits) | (!is_zero & x_bits);
+    // Up: +1 where x ≥ 0 (false for NaN), else −1; down: −1 where x > 0, else +1.
+    let (one, minus_one) = (u32x8::splat(1), u32x8::splat(u32::MAX));
+    let ge = bits(x.simd_ge(zero));
+    let gt = bits(x.simd_gt(zero));
+    let delta_up = (ge & one) | (!ge & minus_one);
+    let delta_down = (gt & minus_one) | (!gt & one);
+    let delta = (up & delta_up) | (!up & delta_down);
+    let stepped = base + delta;
+    // Unchanged: offset 0 or NaN, or the infinity the step points to.
+    let at_inf = (up & bits(x.simd_eq(f32x8::splat(f32::INFINITY))))
+        | (down & bits(x.simd_eq(f32x8::splat(f32::NEG_INFINITY))));
+    let moves = !at_inf & (up | down);
+    bytemuck::cast((moves & stepped) | (!moves & x_bits))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{offset_ray_origin as offset_scalar, step_away_scalar};
+    use crate::sampling::{self, u32_to_unit_f32, Sampler};
+
+    fn draw4_scalar(seed: u32, pixel: u32, sample: u32, dim: u32) -> [f32; 4] {
+        Sampler::new(seed, pixel, sample).draw4(dim)
+    }
+
+    fn lanes_of(values: &[f32], start: usize) -> F8 {
+        floats(|l| values[(start + l) % values.len()])
+    }
+
+    #[test]
+    fn draw4_in_lanes_is_the_samplers_draw4() {
+        for k in 0..64u32 {
+            let (pixel, sample, dim) = (
+                uints(|l| k * 977 + l as u32 * 131),
+                uints(|l| k * 3 + l as u32),
+                uints(|l| (k + l as u32) % 41),
+            );
+            let rows =
+                draw4(k.wrapping_mul(2_654_435_761), pixel, sample, dim).map(|r| r.to_array());
+            let (pixel, sample, dim) = (pixel.to_array(), sample.to_array(), dim.to_array());
+            for l in 0..LANES {
+                let want = draw4_scalar(k.wrapping_mul(2_654_435_761), pixel[l], sample[l], dim[l]);
+                let got = [rows[0][l], rows[1][l], rows[2][l], rows[3][l]];
+                assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits));
+            }
+        }
+    }
+
+    #[test]
+    fn sampling_in_lanes_is_the_scalar_sampling_bit_for_bit() {
+        // Every quarter turn's edges, and a sweep over [0, 1).
+        let mut u: Vec<f32> = vec![0.0, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];
+        u.extend([
+            1.0 - f32::EPSILON / 2.0,
+            0.249_999_98,
+            0.250_000_03,
+            1e-30,
+            1e-40,
+        ]);
+        u.extend((0..4096).map(|i| u32_to_unit_f32((i as u32).wrapping_mul(2_654_435_761))));
+        for start in (0..u.len()).step_by(3) {
+            let (a, b) = (lanes_of(&u, start), lanes_of(&u, start + 5));
+            let (sin, cos) = sin_cos_turns(a);
+            let (sin, cos) = (sin.to_array(), cos.to_array());
+            let dir = sample_cosine_hemisphere(a, b).lanes();
+            let (a, b) = (a.to_array(), b.to_array());
+            for l in 0..LANES {
+                let (s, c) = sampling::sin_cos_turns(a[l]);
+                assert_eq!(
+                    (sin[l].to_bits(), cos[l].to_bits()),
+                    (s.to_bits(), c.to_bits())
+                );
+                let want = sampling::sample_cosine_hemisphere(a[l], b[l]);
+                assert_eq!(
+                    dir[l].to_array().map(f32::to_bits),
+                    want.to_array().map(f32::to_bits)
+                );
+            }
+        }
+    }
+
+    /// Unit normals from every octant, the poles included, and their bases.
+    #[test]
+    fn bases_and_offsets_in_lanes_are_the_scalar_ones_bit_for_bit() {
+        let mut normals = vec![
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            -Vec3::Y,
+            Vec3::new(0.0, 0.0, -0.0),
+        ];
+        for i in 0..200u32 {
+            let u = u32_to_unit_f32(i.wrapping_mul(2_654_435_761));
+            let v = u32_to_unit_f32(i.wrapping_mul(40_503).wrapping_add(7));
+            let z = 1.0 - 2.0 * u;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let (s, c) = sampling::sin_cos_turns(v);
+            normals.push(Vec3::new(r * c, r * s, z));
+        }
+        let specials = [
+            0.0,
+            -0.0,
+            1e-40,
+            -1e-40,
+            3.5,
+            -2.25,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for start in 0..normals.len() {
+            let n = V8::gather(|l| normals[(start + l) % normals.len()]);
+            let w = V8::gather(|l| normals[(start + 3 * l + 1) % normals.len()]);
+            let p = V8::gather(|l| {
+                Vec3::new(
+                    specials[(start + l) % 8],
+                    specials[(start + 2 * l + 1) % 8],
+                    0.1 * (start as f32) - 7.0,
+                )
+            });
+            let p_err = V8::gather(|l| Vec3::splat(1e-6 * (l as f32)));
+            let (t, b) = orthonormal_basis(&n);
+            let (t, b) = (t.lanes(), b.lanes());
+            let o = offset_ray_origin(&p, &p_err, &n, &w).lanes();
+            // Offsets of every sign, zeros of both signs and NaN among them.
+            let offset = V8::gather(|l| {
+                let k = start + l;
+                Vec3::new(
+                    specials[k % 8],
+                    [0.0, -0.0, f32::NAN, 1.0][k % 4],
+                    -specials[(k + 3) % 8],
+                )
+            });
+            let stepped = step_away(&p, &offset).lanes();
+            let offset = offset.lanes();
+            let (n, w, p, p_err) = (n.lanes(), w.lanes(), p.lanes(), p_err.lanes());
+            for l in 0..LANES {
+                let (tw, bw) = sampling::orthonormal_basis(n[l]);
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!((bits(t[l]), bits(b[l])), (bits(tw), bits(bw)));
+                let want = offset_scalar(p[l], p_err[l], n[l], w[l]);
+                assert_eq!(bits(o[l]), bits(want));
+                assert_eq!(bits(stepped[l]), bits(step_away_scalar(p[l], offset[l])));
+            }
+        }
+    }
+}
