@@ -163,7 +163,7 @@ pub fn trace_pixels(
     let mut event_ends = Vec::with_capacity(pixels.len());
     let mut going_on = Vec::with_capacity(pixels.len());
     let mut shaded: Vec<Option<Shaded>> = Vec::with_capacity(pixels.len());
-    let mut batch = Vec::with_capacity(LANES);
+    let mut diffuse = Vec::with_capacity(pixels.len());
     let mut shadow_rays = Vec::new();
     let mut blocked = Vec::new();
     while !live.is_empty() {
@@ -184,38 +184,24 @@ pub fn trace_pixels(
         // take `shade_hit` below, and the shadow rays are listed in path order.
         shaded.clear();
         shaded.resize(live.len(), None);
+        diffuse.clear();
         if light_samples <= 1 {
-            batch.clear();
-            for (j, hit) in hits.iter().enumerate() {
-                let Some(hit) = hit else { continue };
-                if scene.materials[hit.material as usize].kind != KIND_DIFFUSE {
-                    continue;
-                }
-                batch.push(j);
-                if batch.len() == LANES {
-                    shade_batch(
-                        scene,
-                        seed,
-                        pixels,
-                        (&live, &hits, &batch),
-                        &mut flight,
-                        faults,
-                        &mut shaded,
-                    );
-                    batch.clear();
-                }
-            }
-            if !batch.is_empty() {
-                shade_batch(
-                    scene,
-                    seed,
-                    pixels,
-                    (&live, &hits, &batch),
-                    &mut flight,
-                    faults,
-                    &mut shaded,
-                );
-            }
+            diffuse.extend(hits.iter().enumerate().filter_map(|(j, hit)| {
+                hit.as_ref()
+                    .filter(|hit| scene.materials[hit.material as usize].kind == KIND_DIFFUSE)
+                    .map(|_| j)
+            }));
+        }
+        for batch in diffuse.chunks(LANES) {
+            shade_batch(
+                scene,
+                seed,
+                pixels,
+                (&live, &hits, batch),
+                &mut flight,
+                faults,
+                &mut shaded,
+            );
         }
         for (j, (&p, hit)) in live.iter().zip(&hits).enumerate() {
             let on = if let Some(Shaded { event, going_on }) = shaded[j] {
