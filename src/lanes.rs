@@ -25,6 +25,12 @@ pub type U8 = u32x8;
 /// the sign bit, −0 from +0 included).
 const SIGN: f32x8 = f32x8::splat(-0.0);
 
+/// −x in every lane (Rust's unary minus: the sign bit flipped).
+#[inline(always)]
+pub fn neg(x: F8) -> F8 {
+    x ^ SIGN
+}
+
 /// Per lane, `if_true` where `mask` (a comparison's all-ones lanes), else `if_false`.
 #[inline(always)]
 fn select(mask: f32x8, if_true: f32x8, if_false: f32x8) -> f32x8 {
@@ -155,9 +161,9 @@ impl V8 {
     #[inline(always)]
     pub fn neg(&self) -> V8 {
         V8 {
-            x: self.x ^ SIGN,
-            y: self.y ^ SIGN,
-            z: self.z ^ SIGN,
+            x: neg(self.x),
+            y: neg(self.y),
+            z: neg(self.z),
         }
     }
 
@@ -225,7 +231,7 @@ pub fn sin_cos_turns(u: F8) -> (F8, F8) {
     let half: f32x8 = bytemuck::cast((quarter & i32x8::splat(2)).simd_eq(i32x8::splat(2)));
     let flip = half & SIGN;
     let sin = select(odd, c, s) ^ flip;
-    let cos = select(odd, s ^ SIGN, c) ^ flip;
+    let cos = select(odd, neg(s), c) ^ flip;
     (sin, cos)
 }
 
@@ -251,12 +257,12 @@ pub fn orthonormal_basis(n: &V8) -> (V8, V8) {
     let t = V8 {
         x: one + sign * n.x * n.x * a,
         y: sign * b,
-        z: (sign ^ SIGN) * n.x,
+        z: neg(sign) * n.x,
     };
     let bt = V8 {
         x: b,
         y: sign + n.y * n.y * a,
-        z: n.y ^ SIGN,
+        z: neg(n.y),
     };
     (t, bt)
 }

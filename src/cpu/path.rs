@@ -23,8 +23,7 @@ use crate::film::PixelStats;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
 use crate::lanes::{self, F8, LANES, U8, V8};
-use crate::light::LightSample;
-use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, LightSample};
 use crate::packet::{intersect_closest_all, occluded_all};
 use crate::sampling::{
     dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA, MAX_LIGHT_SAMPLES,
@@ -365,7 +364,7 @@ fn shade_diffuse_lanes(
     let dist2 = to_light.dot(&to_light);
     let wi = to_light.div(dist2.sqrt());
     let cos_s = facing.dot(&wi);
-    let cos_l = ls_n.dot(&wi) ^ F8::splat(-0.0);
+    let cos_l = lanes::neg(ls_n.dot(&wi));
     let origin = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
     let light_point = lanes::offset_ray_origin(&ls_p, &ls_p_err, &ls_n, &wi.neg());
     let shadow_d = light_point.sub(&origin);
