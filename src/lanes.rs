@@ -4,10 +4,12 @@
 //! hashes whose latency, not its instruction count, bounds the path tracer
 //! (docs/performance.md). Eight independent paths side by side fill the vector units instead:
 //! each function here is its scalar namesake's arithmetic, operation for operation in the same
-//! order, written as a loop over the lanes of structure-of-arrays values, which the compiler
-//! turns into vector instructions. No operation is fused or reordered, so every lane's result
-//! is the scalar function's bit for bit (the tests below, on values that include zeros of both
-//! signs, subnormals and infinities where the scalar functions accept them).
+//! order, on structure-of-arrays values of the `wide` crate's eight-lane vectors (one AVX
+//! register each where the build targets AVX, as the host build does; two SSE2 halves in the
+//! portable build). No operation is fused or reordered, so every lane's result is the scalar
+//! function's bit for bit (the tests below, on values that include zeros of both signs,
+//! subnormals, infinities and NaN where the scalar functions accept them). The compiler's own
+//! vectorisation of plain loops over arrays was tried first: it left most of the work scalar.
 
 use glam::Vec3;
 use std::f32::consts::FRAC_PI_2;
