@@ -33,12 +33,6 @@ pub fn neg(x: F8) -> F8 {
     x ^ SIGN
 }
 
-/// Per lane, `if_true` where `mask` (a comparison's all-ones lanes), else `if_false`.
-#[inline(always)]
-fn select(mask: f32x8, if_true: f32x8, if_false: f32x8) -> f32x8 {
-    mask.select(if_true, if_false)
-}
-
 /// A float mask as integer lanes.
 #[inline(always)]
 fn bits(x: f32x8) -> u32x8 {
@@ -232,8 +226,8 @@ pub fn sin_cos_turns(u: F8) -> (F8, F8) {
     let odd: f32x8 = bytemuck::cast((quarter & i32x8::splat(1)).simd_eq(i32x8::splat(1)));
     let half: f32x8 = bytemuck::cast((quarter & i32x8::splat(2)).simd_eq(i32x8::splat(2)));
     let flip = half & SIGN;
-    let sin = select(odd, c, s) ^ flip;
-    let cos = select(odd, neg(s), c) ^ flip;
+    let sin = odd.select(c, s) ^ flip;
+    let cos = odd.select(neg(s), c) ^ flip;
     (sin, cos)
 }
 
@@ -253,7 +247,7 @@ pub fn sample_cosine_hemisphere(u1: F8, u2: F8) -> V8 {
 #[inline(always)]
 pub fn orthonormal_basis(n: &V8) -> (V8, V8) {
     let one = f32x8::splat(1.0);
-    let sign = select(n.z.simd_ge(f32x8::ZERO), one, -one);
+    let sign = n.z.simd_ge(f32x8::ZERO).select(one, -one);
     let a = f32x8::splat(-1.0) / (sign + n.z);
     let b = n.x * n.y * a;
     let t = V8 {

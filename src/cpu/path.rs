@@ -16,7 +16,7 @@
 //! after them is counted in full. Russian roulette ends paths without bias; there is no
 //! maximum depth.
 
-use crate::bsdf::{sample_bsdf, Transport};
+use crate::bsdf::{sample_bsdf, BsdfSample, Transport};
 use crate::bvh::{intersect_closest, occluded};
 use crate::camera::Camera;
 use crate::film::PixelStats;
@@ -269,7 +269,7 @@ struct Shaded {
 
 /// [`shade_diffuse_lanes`] for a round's diffuse hits `batch` (at most [`LANES`] indices into
 /// the round's `live` paths and their `hits`), each one's result in `shaded` at its index; the
-/// lanes past the batch's end repeat its first hit, and their results are dropped.
+/// lanes past the batch's end repeat its last hit, and their results are dropped.
 #[inline]
 fn shade_batch(
     scene: &FlatScene,
@@ -330,7 +330,6 @@ fn shade_diffuse_lanes(
     events: &mut [Option<NextEvent>; LANES],
     going_on: &mut [bool; LANES],
 ) {
-    let bounce = lanes::uints(|l| paths[l].bounce);
     let (p, p_err, n) = (
         V8::gather(|l| hits[l].p),
         V8::gather(|l| hits[l].p_err),
@@ -342,12 +341,11 @@ fn shade_diffuse_lanes(
     let facing = n.neg_where(n.dot(&wo).simd_lt(F8::ZERO));
 
     // Step 4 - next-event estimation, one light sample (`shade_hit`'s step 4 with N = 1).
-    let bounce_dims = bounce.to_array();
     let u_light = lanes::draw4(
         seed,
         pixel,
         sample,
-        lanes::uints(|l| dim_light(bounce_dims[l])),
+        lanes::uints(|l| dim_light(paths[l].bounce)),
     );
     let u = u_light.map(|row| row.to_array());
     let mut ls = [LightSample::default(); LANES];
@@ -389,12 +387,12 @@ fn shade_diffuse_lanes(
     }
 
     // Step 5 - scattering: a cosine-weighted direction about the side wo lies on
-    // (`sample_bsdf`'s diffuse lobe); the throughput takes the albedo.
+    // (`sample_bsdf`'s diffuse lobe, whose weight is the albedo); step 6 as in `shade_hit`.
     let u_bsdf = lanes::draw4(
         seed,
         pixel,
         sample,
-        lanes::uints(|l| dim_bsdf(bounce_dims[l])),
+        lanes::uints(|l| dim_bsdf(paths[l].bounce)),
     );
     let local = lanes::sample_cosine_hemisphere(u_bsdf[0], u_bsdf[1]);
     let (t, b) = lanes::orthonormal_basis(&facing);
@@ -403,37 +401,17 @@ fn shade_diffuse_lanes(
         .add(&b.scale(local.y))
         .add(&facing.scale(local.z));
     let pdf = (local.z * F8::splat(FRAC_1_PI)).to_array();
-    let throughput = throughput.mul(&albedo).lanes();
     let ray_o = lanes::offset_ray_origin(&p, &p_err, &n, &wi).lanes();
-    let wi = wi.lanes();
+    let (wi, albedo) = (wi.lanes(), albedo.lanes());
     let u_roulette = u_light[3].to_array();
     for l in 0..LANES {
-        let path = &mut paths[l];
-        path.throughput = throughput[l];
-        if pdf[l] == 0.0 {
-            path.throughput *= faults.specular_scale;
-        }
-        path.bsdf_pdf = pdf[l];
-        if path.throughput.max_element() <= 0.0 {
-            going_on[l] = false;
-            continue;
-        }
-        path.ray = Ray {
-            o: ray_o[l],
-            d: wi[l],
+        let bs = BsdfSample {
+            wi: wi[l],
+            weight: albedo[l],
+            pdf: pdf[l],
+            eta2: 1.0,
         };
-
-        // Step 6 - Russian roulette, as in `shade_hit`.
-        if path.bounce >= RR_START_BOUNCE {
-            let q = (path.throughput.max_element() * path.eta_scale).min(RR_MAX_SURVIVAL);
-            if u_roulette[l] >= q {
-                going_on[l] = false;
-                continue;
-            }
-            path.throughput /= q;
-        }
-        path.bounce += 1;
-        going_on[l] = path.bounce < faults.max_bounces;
+        going_on[l] = take_bsdf_sample(&mut paths[l], &bs, || ray_o[l], u_roulette[l], faults);
     }
 }
 
@@ -600,6 +578,26 @@ pub fn shade_hit(
     // the sample's weight f · |cos θi| / pdf.
     let u_bsdf = sampler.draw4(dim_bsdf(bounce));
     let bs = sample_bsdf(&material, hit.n, wo, u_bsdf, Transport::Radiance);
+    take_bsdf_sample(
+        path,
+        &bs,
+        || offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+        u_light[3],
+        faults,
+    )
+}
+
+/// The end of step 5 and step 6, once the BSDF sample `bs` is drawn: the throughput takes its
+/// weight and the next ray leaves `origin()` along it, then roulette with `u_roulette`; false
+/// when the path has ended.
+#[inline]
+fn take_bsdf_sample(
+    path: &mut PathState,
+    bs: &BsdfSample,
+    origin: impl FnOnce() -> Vec3,
+    u_roulette: f32,
+    faults: Faults,
+) -> bool {
     path.throughput *= bs.weight;
     if bs.pdf == 0.0 {
         path.throughput *= faults.specular_scale;
@@ -610,16 +608,16 @@ pub fn shade_hit(
         return false;
     }
     path.ray = Ray {
-        o: offset_ray_origin(hit.p, hit.p_err, hit.n, bs.wi),
+        o: origin(),
         d: bs.wi,
     };
 
     // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
     // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
     // unbiased (E[X / q · 1{u < q}] = E[X]) while ending low-throughput paths.
-    if bounce >= RR_START_BOUNCE {
+    if path.bounce >= RR_START_BOUNCE {
         let q = (path.throughput.max_element() * path.eta_scale).min(RR_MAX_SURVIVAL);
-        if u_light[3] >= q {
+        if u_roulette >= q {
             return false;
         }
         path.throughput /= q;
