@@ -41,9 +41,43 @@ use crate::flat::FlatScene;
 /// | cornell_box vcm | 2.28e-4 | 2.40e-4 (1.05) | 2.58e-4 (1.13) | 2.82e-4 (1.24) | 3.13e-4 (1.38) |
 ///
 /// The rooms' caustics want a wider disk, the Cornell box (no specular surface, so merging
-/// only adds its bias there) a narrower one; over the three, the geometric mean of the ratios is
-/// 0.97 at 0.01 and 0.99 at 0.007, within what three seeds resolve. So the default stays
-/// SmallVCM's; `--radius` sets another per render.
+/// only adds its bias there) a narrower one; over the three, the geometric mean of the ratios was
+/// 0.97 at 0.01 and 0.99 at 0.007, within what three seeds resolved, and the default stayed
+/// SmallVCM's 0.003.
+///
+/// Measured again on 2026-11-27 (build f875e5f: vcm with two camera subpaths behind mirrors and
+/// glass, its visibility rays in packets; 30 s renders on 2 cores, 256x256, seeds 11 and 12,
+/// relMSE minus the references' noise, mean of the two and its ratio to 0.003's; the GPU path
+/// references of `tests/data/references/h100/` and Mitsuba's cornell_box):
+///
+/// | r_1 / scene radius | 0.003 | 0.006 | 0.01 | 0.013 |
+/// | --- | --- | --- | --- | --- |
+/// | tncg15_room vcm | 1.42e-3 | 1.28e-3 (0.90) | 1.06e-3 (0.75) | 1.00e-3 (0.70) |
+/// | glass_room vcm | 1.49e-3 | 1.40e-3 (0.94) | 1.29e-3 (0.87) | 1.31e-3 (0.88) |
+/// | cornell_box vcm | 1.95e-4 | 2.19e-4 (1.12) | 2.34e-4 (1.20) | 2.63e-4 (1.35) |
+/// | geometric mean of the ratios | 1 | 0.98 | 0.92 | 0.94 |
+///
+/// On the CPU at 256x256, 0.01 wins (the bias, from the two seeds' images, grows from about 0
+/// to 8e-5 of tncg15_room's 1.13e-3). On an NVIDIA H200 the same day (one render each, seed 5,
+/// ratio of 0.01's relMSE to 0.003's, the references' noise subtracted;
+/// docs/bench/2026-11-27_h200/radius_equal_time.txt) it does not:
+///
+/// | GPU | tncg15_room | glass_room | cornell_box |
+/// | --- | --- | --- | --- |
+/// | vcm, 256x256, 6 s | 0.80 | 1.00 | 1.12 |
+/// | vcm, 512x512, 4 s | 1.20 | 1.58 | 2.82 |
+/// | sppm, 256x256, 6 s | 0.38 | 0.45 | 0.24 |
+/// | sppm, 512x512, 4 s | 2.10 | 2.31 | 1.20 |
+///
+/// The best radius falls with the image size: at 512x512 an iteration has four times the light
+/// subpaths, so a disk of the same size holds four times the photons and merging outweighs the
+/// other strategies sooner, and each query costs more. A radius in scene units that suits
+/// 256x256 is too wide at `render`'s default 512x512. Scaling r_1 as 1 / sqrt(N) (the same
+/// photons per disk at every size, a pixel footprint) would follow that; not measured yet.
+/// Also, the wider disk lets neighbouring pixels share photons, which the block statistic of
+/// the GPU = CPU tests treats as independent (24 seeds of sppm at 64x64 on tncg15_room: block
+/// means scatter 1.10x their claimed variance at 0.01, 0.94x at 0.003), and the sppm test
+/// rejected one block at p = 1.5e-5 there. The default stays 0.003.
 pub const DEFAULT_RADIUS_FACTOR: f32 = 0.003;
 
 /// The default α: SmallVCM's and Knaus and Zwicker's 0.75.
