@@ -73,7 +73,11 @@ use crate::flat::FlatScene;
 /// subpaths, so a disk of the same size holds four times the photons and merging outweighs the
 /// other strategies sooner, and each query costs more. A radius in scene units that suits
 /// 256x256 is too wide at `render`'s default 512x512. Scaling r_1 as 1 / sqrt(N) (the same
-/// photons per disk at every size, a pixel footprint) would follow that; not measured yet.
+/// photons per disk at every size, a pixel footprint) would follow that: 0.01 at 256x256 is
+/// 0.005 at 512x512, which on an NVIDIA H100 the same day (512x512, 4 s, seed 5, one render
+/// each; docs/bench/2026-11-27_h200/radius_512_h100.txt) gave 0.85, 1.02 and 1.15 of 0.003's
+/// relMSE for vcm (geometric mean 1.00) and 0.92, 0.98 and 0.66 for sppm (0.84). Not made the
+/// default yet: the tests render at 64x64 and below, where that rule widens the disk further.
 /// Also, the wider disk lets neighbouring pixels share photons, which the block statistic of
 /// the GPU = CPU tests treats as independent (24 seeds of sppm at 64x64 on tncg15_room: block
 /// means scatter 1.10x their claimed variance at 0.01, 0.94x at 0.003), and the sppm test
