@@ -130,6 +130,43 @@ pub fn render_cpu_merging(
     )
 }
 
+/// The films of iterations `0..iterations` of one CPU render of a merging method, each alone
+/// (iteration i with the schedule's radius r_i and the seed's streams of iteration i), so that
+/// each is one independent estimate of every pixel: the batches of
+/// [`parity::parity_of_iterations`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_cpu_merging_iterations(
+    rel: &str,
+    width: u32,
+    height: u32,
+    iterations: u32,
+    seed: u32,
+    method: Method,
+    radius: hexray::merging::MergeRadius,
+    faults: Faults,
+) -> Vec<Film> {
+    let (scene, flat) = load(rel);
+    let camera = Camera::new(&scene.desc.camera, width, height);
+    let mut buffers = LightPassBuffers::new(&flat, &camera, method, radius);
+    (0..iterations)
+        .map(|i| {
+            let mut film = Film::new(width, height);
+            render_iterations(
+                &flat,
+                &camera,
+                seed,
+                i,
+                1,
+                method,
+                faults,
+                &mut buffers,
+                &mut film,
+            );
+            film
+        })
+        .collect()
+}
+
 /// The one CPU render every helper here ends in: `spp` samples of a flattened scene, seen by
 /// the loaded scene's camera, with a merge radius schedule (None: the scene's default).
 #[allow(clippy::too_many_arguments)]
@@ -307,6 +344,32 @@ pub fn render_gpu_merging(
         faults,
         Some(radius),
     )
+}
+
+/// [`render_cpu_merging_iterations`] on the GPU: one renderer, asked for one iteration at a
+/// time.
+#[allow(clippy::too_many_arguments)]
+pub fn render_gpu_merging_iterations(
+    gpu: &hexray::gpu::Gpu,
+    rel: &str,
+    width: u32,
+    height: u32,
+    iterations: u32,
+    seed: u32,
+    method: Method,
+    radius: hexray::merging::MergeRadius,
+    faults: Faults,
+) -> Vec<Film> {
+    let (scene, flat) = load(rel);
+    let mut r = gpu_renderer(gpu, &scene, &flat, width, height, seed, method, faults);
+    r.set_merge_radius(radius);
+    (0..iterations)
+        .map(|i| {
+            let mut film = Film::new(width, height);
+            r.render(i, 1, &mut film).unwrap();
+            film
+        })
+        .collect()
 }
 
 /// The one GPU render every helper here ends in, with the kernel and residency the CLI uses and
