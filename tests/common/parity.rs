@@ -64,7 +64,7 @@ pub fn parity(a: &Film, b: &Film) -> Parity {
 /// the covariance of the pixels that merged the same photons, which [`parity`]'s sum of pixel
 /// variances leaves out: measured over 24 seeds of sppm on tncg15_room at 64x64, 48 iterations,
 /// the block means scatter 0.94x the variance that sum claims at `--radius` 0.003 of the scene
-/// radius and 1.10x at 0.01, where the disk is two thirds of a pixel wide. The iterations are
+/// radius and 1.10x at 0.01, where the disk is about a pixel wide on the walls. The iterations are
 /// independent but not identically distributed (the radius shrinks, and the bias with it); their
 /// scatter then also holds the drift of their expectations, the same on both sides, which makes
 /// the standard error a little conservative, not too small.
