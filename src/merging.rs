@@ -79,6 +79,7 @@ use crate::flat::FlatScene;
 /// relMSE for vcm (geometric mean 1.00) and 0.92, 0.98 and 0.66 for sppm (0.84). Not made the
 /// default yet: the tests render at 64x64 and below, where that rule widens the disk further,
 /// and what that does to each of them is not yet measured.
+///
 /// Also, the wider disk lets neighbouring pixels share photons, which the block statistic of
 /// the GPU = CPU tests treated as independent (24 seeds of sppm at 64x64 on tncg15_room: block
 /// means scatter 1.10x their claimed variance at 0.01, 0.94x at 0.003), and the sppm test

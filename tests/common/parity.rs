@@ -1,6 +1,7 @@
 //! The parity statistic of `tests/gpu_parity.rs` for any two films, and renders that several
 //! stability tests compare against, rendered once per test binary.
 
+use glam::Vec3;
 use hexray::cpu::Faults;
 use hexray::film::Film;
 use hexray::method::Method;
@@ -73,42 +74,26 @@ pub fn parity_of_iterations(a: &[Film], b: &[Film]) -> Parity {
     compare(&a, &b, a.grand_mean(), b.grand_mean())
 }
 
-/// The `b` x `b` block means of each iteration's film averaged over the iterations, each with
-/// the variance of that average from the iterations' scatter; the image mean's standard error
-/// likewise.
+/// The `b` x `b` block means of each iteration's film, each block's taken as one sample of a
+/// film whose pixels are the blocks, and each iteration's image mean as one of its
+/// `iteration_means`: that film's pixel means and variances of the mean are the batch means
+/// and their variances, and its image mean's standard error theirs.
 fn batch_blocks(films: &[Film], b: usize) -> MeanImage {
-    let n = films.len() as f64;
-    let per: Vec<MeanImage> = films
-        .iter()
-        .map(|f| MeanImage::from_film(f).blocks(b))
-        .collect();
-    let mean_and_var = |xs: &[f64]| {
-        let m = xs.iter().sum::<f64>() / n;
-        let ss: f64 = xs.iter().map(|x| (x - m).powi(2)).sum();
-        (m, ss / ((n - 1.0) * n))
-    };
-    let blocks = per[0].mean.len();
-    let mut mean = vec![[0.0; 3]; blocks];
-    let mut var = vec![[0.0; 3]; blocks];
-    for j in 0..blocks {
-        for c in 0..3 {
-            let xs: Vec<f64> = per.iter().map(|m| m.mean[j][c]).collect();
-            (mean[j][c], var[j][c]) = mean_and_var(&xs);
+    let mut batches: Option<Film> = None;
+    for film in films {
+        let blocks = MeanImage::from_film(film).blocks(b);
+        let batches = batches.get_or_insert_with(|| {
+            Film::with_iteration_means(blocks.width as u32, blocks.height as u32)
+        });
+        let sample = |x: [f64; 3]| Vec3::from(x.map(|v| v as f32));
+        for (stats, mean) in batches.pixels.iter_mut().zip(&blocks.mean) {
+            stats.add(sample(*mean));
+        }
+        if let Some(images) = batches.iteration_means.as_mut() {
+            images.add(sample(blocks.grand_mean().0));
         }
     }
-    let images: Vec<[f64; 3]> = per.iter().map(|m| m.grand_mean().0).collect();
-    let image_se = [0, 1, 2].map(|c| {
-        let xs: Vec<f64> = images.iter().map(|x| x[c]).collect();
-        mean_and_var(&xs).1.sqrt()
-    });
-    MeanImage {
-        width: per[0].width,
-        height: per[0].height,
-        mean,
-        var,
-        n,
-        mean_se: Some(image_se),
-    }
+    MeanImage::from_film(&batches.expect("at least one iteration"))
 }
 
 /// Welch per block and channel of two block images, and the ratio b / a of two image means
