@@ -69,7 +69,7 @@ use crate::flat::FlatScene;
 /// | sppm, 256x256, 6 s | 0.38 | 0.45 | 0.24 |
 /// | sppm, 512x512, 4 s | 2.10 | 2.31 | 1.20 |
 ///
-/// The best radius falls with the image size: at 512x512 an iteration has four times the light
+/// The reading then (refuted below): the best radius falls with the image size, since at 512x512 an iteration has four times the light
 /// subpaths, so a disk of the same size holds four times the photons and merging outweighs the
 /// other strategies sooner, and each query costs more. A radius in scene units that suits
 /// 256x256 is too wide at `render`'s default 512x512. Scaling r_1 as 1 / sqrt(N) (the same
@@ -77,16 +77,46 @@ use crate::flat::FlatScene;
 /// 0.005 at 512x512, which on an NVIDIA H100 the same day (512x512, 4 s, seed 5, one render
 /// each; docs/bench/2026-11-27_h200/radius_512_h100.txt) gave 0.85, 1.02 and 1.15 of 0.003's
 /// relMSE for vcm (geometric mean 1.00) and 0.92, 0.98 and 0.66 for sppm (0.84). Not made the
-/// default yet: the tests render at 64x64 and below, where that rule widens the disk further,
-/// and what that does to each of them is not yet measured.
+/// default then: the tests render at 64x64 and below, where that rule widens the disk further.
 ///
 /// Also, the wider disk lets neighbouring pixels share photons, which the block statistic of
 /// the GPU = CPU tests treated as independent (24 seeds of sppm at 64x64 on tncg15_room: block
 /// means scatter 1.10x their claimed variance at 0.01, 0.94x at 0.003), and the sppm test
 /// rejected one block at p = 1.5e-5 there. Those tests now take their standard errors from the
 /// iterations' block means (`tests/common/parity.rs`, `parity_of_iterations`), which accept the
-/// same renders at 0.01 (smallest p 1.4e-4). The default stays 0.003.
-pub const DEFAULT_RADIUS_FACTOR: f32 = 0.003;
+/// same renders at 0.01.
+///
+/// **The default since 2026-11-27 is 0.01, at every image size** (build 371366e, 2 cores of an
+/// Intel Xeon VM; relMSE minus the references' noise as a ratio to 0.003's at α = 0.75, summed
+/// over the seeds; docs/bench/merge_radius_2026-11-27_default.md):
+///
+/// | CPU, vcm | tncg15_room | glass_room | cornell_box |
+/// | --- | --- | --- | --- |
+/// | 256x256, 30 s, seeds 11 and 12: 0.01 | **0.77** | **0.84** | **1.10** |
+/// | the same, 0.01 with α = 2/3 | 0.97 | 0.83 | 1.08 |
+/// | the same, 0.015 with α = 2/3 | 0.81 | 0.81 | 1.17 |
+/// | 256x256, 120 s (650 – 1340 iterations), seed 13: 0.01 | 0.84 | | 1.06 |
+/// | 512x512, 10 s (the README's render), seeds 5 and 6, as 2x2 block means: 0.005 | 0.85 | 0.89 | 1.31 |
+/// | the same: 0.0075 | 0.71 | 0.82 | 1.25 |
+/// | sppm, 256x256, 30 s, seed 11: 0.01 | 0.15 | 0.16 | 0.13 |
+/// | the same: 0.02 | 0.19 | 0.22 | 0.12 |
+///
+/// The scaling as 1 / sqrt(pixels) was tried and refuted: at 32x32 it makes the disk 0.08 of
+/// the scene radius, and the convergence tests' relMSE rose 30 – 300 fold (vcm on the caustic
+/// 0.55 at 256 iterations, against 1.9e-3 at 0.01 and 3.6e-3 at 0.003): the bias is set by the
+/// disk's size in the scene, not in pixels. A fixed share suits the CPU at both sizes, where
+/// the variance of a merge per unit time does not depend on N (4x the photons a disk, 1/4 the
+/// iterations). At 0.01 the tests' 32x32 renders improve too: relMSE on the caustic at 256 →
+/// 1024 iterations 1.9e-3 → 4.9e-4 (vcm; 3.6e-3 → 1.1e-3 at 0.003), sppm at 128 → 512
+/// iterations 4.4e-2 → 1.6e-2 (about 0.5 at 0.003).
+///
+/// The wider disk pays less as the iterations grow: the squared bias falls as n^(2α − 2), the
+/// variance as n^−α, so long renders become bias-bound (0.84 at 120 s against 0.77 at 30 s;
+/// 0.015 lost most of its lead). That is what the H200 showed at 512x512 after some 450
+/// iterations in 4 s (the table above); on such a GPU a render of thousands of iterations is
+/// better served by `--radius` at 0.003 of the scene radius or by a smaller `--alpha`. α = 2/3,
+/// where the two rates meet, did not do better within 120 s.
+pub const DEFAULT_RADIUS_FACTOR: f32 = 0.01;
 
 /// The default α: SmallVCM's and Knaus and Zwicker's 0.75.
 pub const DEFAULT_ALPHA: f32 = 0.75;

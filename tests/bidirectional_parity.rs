@@ -1,12 +1,16 @@
 //! The GPU's light tracing and BDPT compute the CPU's images: `tests/gpu_parity.rs`'s statistic
 //! (per 8x8 block and channel, Welch's t-test with a Bonferroni correction at α = 0.01 overall,
-//! and each channel's image-mean ratio within 4 s.e. of 1, from the batch means), between a CPU
-//! and a GPU render of other seeds, 64x64 pixels. Power: a GPU whose mirrors and glass pass 10 %
-//! less light is rejected on tncg15_room.
+//! and each channel's image-mean ratio within 4 s.e. of 1), between a CPU and a GPU render of
+//! other seeds, 64x64 pixels. A light subpath splats into several pixels (light tracing's
+//! connections to the camera), so the pixels of an iteration are not independent: as for the
+//! merging methods, each standard error comes from the scatter of the iterations' block means
+//! (`parity_of_iterations`, which counts that covariance). Power: a GPU whose mirrors and glass
+//! pass 10 % less light is rejected on tncg15_room.
 
-use crate::common::parity::{parity, Parity};
+use crate::common::parity::{parity_of_iterations, Parity};
 use crate::common::*;
 use hexray::cpu::Faults;
+use hexray::merging::MergeRadius;
 use hexray::method::Method;
 
 const SIZE: u32 = 64;
@@ -18,9 +22,23 @@ fn cpu_against_gpu(
     gpu_faults: Faults,
 ) -> Option<Parity> {
     let gpu = gpu()?;
-    let a = render_cpu_method(rel, SIZE, SIZE, iterations, 80, method, Faults::NONE);
-    let b = render_gpu_method(gpu, rel, SIZE, SIZE, iterations, 81, method, gpu_faults);
-    let p = parity(&a, &b);
+    // Light tracing and BDPT do not merge: the radius is not used.
+    let (_, flat) = load(rel);
+    let radius = MergeRadius::default_for(&flat);
+    let a = render_cpu_iterations(
+        rel,
+        SIZE,
+        SIZE,
+        iterations,
+        80,
+        method,
+        radius,
+        Faults::NONE,
+    );
+    let b = render_gpu_iterations(
+        gpu, rel, SIZE, SIZE, iterations, 81, method, radius, gpu_faults,
+    );
+    let p = parity_of_iterations(&a, &b);
     eprintln!("{method} {rel}, {iterations} iterations, GPU against CPU: {p}");
     Some(p)
 }

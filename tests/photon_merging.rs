@@ -204,9 +204,11 @@ fn converges(scene: &str, reference: &str, method: Method, n: u32) {
 }
 
 /// The caustic scene (a glass sphere focusing a small light onto the floor). Measured with the
-/// default radius schedule on 32x32: sppm 0.80 → 0.24 → 0.094 and vcm 2.5e-2 → 3.6e-3 → 1.1e-3
-/// at 64, 256, 1024 iterations. VCM starts at 256: below that its error is a few rare bright
-/// merges (heavy-tailed), and one seed's 128 → 512 fell only to 0.50x.
+/// default radius schedule on 32x32: sppm 4.4e-2 → 1.6e-2 at 128 → 512 iterations and vcm
+/// 1.9e-3 → 4.9e-4 at 256 → 1024 (at the earlier default of 0.003 of the scene radius, sppm
+/// 0.80 → 0.24 → 0.094 and vcm 2.5e-2 → 3.6e-3 → 1.1e-3 at 64, 256, 1024). VCM starts at 256:
+/// at 0.003, below that its error was a few rare bright merges (heavy-tailed), and one seed's
+/// 128 → 512 fell only to 0.50x.
 #[test]
 fn sppm_converges_on_the_caustic() {
     converges(CAUSTIC, CAUSTIC_REFERENCE, Method::Sppm, 128);
@@ -218,7 +220,8 @@ fn vcm_converges_on_the_caustic() {
 }
 
 /// glass_room (glass spheres over a diffuse floor under a small light). Measured on 32x32:
-/// sppm 0.81 → 0.33 at 128 → 512 iterations, vcm 3.3e-3 → 8.3e-4.
+/// sppm 7.8e-2 → 2.7e-2 at 128 → 512 iterations, vcm 4.1e-3 → 9.2e-4 (at 0.003 of the scene
+/// radius: 0.81 → 0.33 and 3.3e-3 → 8.3e-4).
 #[test]
 fn sppm_converges_on_glass_room() {
     converges(GLASS, GLASS_REFERENCE, Method::Sppm, 128);
@@ -256,8 +259,8 @@ fn gpu_parity(rel: &str, method: Method, gpu_faults: Faults) -> Option<Parity> {
     let gpu = gpu()?;
     let (_, flat) = load(rel);
     let radius = MergeRadius::default_for(&flat);
-    let a = render_cpu_merging_iterations(rel, 64, 64, 48, 80, method, radius, Faults::NONE);
-    let b = render_gpu_merging_iterations(gpu, rel, 64, 64, 48, 81, method, radius, gpu_faults);
+    let a = render_cpu_iterations(rel, 64, 64, 48, 80, method, radius, Faults::NONE);
+    let b = render_gpu_iterations(gpu, rel, 64, 64, 48, 81, method, radius, gpu_faults);
     let p = parity_of_iterations(&a, &b);
     eprintln!("{method} {rel}, GPU against CPU, batch means: {p}");
     Some(p)

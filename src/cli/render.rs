@@ -45,7 +45,7 @@ pub(crate) struct RenderArgs {
     /// scenes, docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
-    /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.003 x the scene's
+    /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.01 x the scene's
     /// bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm with 0 is
     /// bdpt.
     #[arg(long, value_parser = parse_radius)]

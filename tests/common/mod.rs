@@ -130,12 +130,12 @@ pub fn render_cpu_merging(
     )
 }
 
-/// The films of iterations `0..iterations` of one CPU render of a merging method, each alone
-/// (iteration i with the schedule's radius r_i and the seed's streams of iteration i), so that
-/// each is one independent estimate of every pixel: the batches of
-/// [`parity::parity_of_iterations`].
+/// The films of iterations `0..iterations` of one CPU render of a method that splats or merges
+/// (light, bdpt, sppm, vcm), each alone (iteration i with the seed's streams of iteration i and,
+/// when merging, the schedule's radius r_i), so that each is one independent estimate of every
+/// pixel: the batches of [`parity::parity_of_iterations`].
 #[allow(clippy::too_many_arguments)]
-pub fn render_cpu_merging_iterations(
+pub fn render_cpu_iterations(
     rel: &str,
     width: u32,
     height: u32,
@@ -346,10 +346,10 @@ pub fn render_gpu_merging(
     )
 }
 
-/// [`render_cpu_merging_iterations`] on the GPU: one renderer, asked for one iteration at a
+/// [`render_cpu_iterations`] on the GPU: one renderer, asked for one iteration at a
 /// time.
 #[allow(clippy::too_many_arguments)]
-pub fn render_gpu_merging_iterations(
+pub fn render_gpu_iterations(
     gpu: &hexray::gpu::Gpu,
     rel: &str,
     width: u32,
