@@ -69,9 +69,10 @@ use crate::flat::FlatScene;
 /// | sppm, 256x256, 6 s | 0.38 | 0.45 | 0.24 |
 /// | sppm, 512x512, 4 s | 2.10 | 2.31 | 1.20 |
 ///
-/// The reading then (refuted below): the best radius falls with the image size, since at 512x512 an iteration has four times the light
-/// subpaths, so a disk of the same size holds four times the photons and merging outweighs the
-/// other strategies sooner, and each query costs more. A radius in scene units that suits
+/// The reading then (refuted below): the best radius falls with the image size, since at
+/// 512x512 an iteration has four times the light subpaths, so a disk of the same size holds
+/// four times the photons and merging outweighs the other strategies sooner, and each query
+/// costs more. A radius in scene units that suits
 /// 256x256 is too wide at `render`'s default 512x512. Scaling r_1 as 1 / sqrt(N) (the same
 /// photons per disk at every size, a pixel footprint) would follow that: 0.01 at 256x256 is
 /// 0.005 at 512x512, which on an NVIDIA H100 the same day (512x512, 4 s, seed 5, one render
