@@ -107,9 +107,10 @@ use crate::flat::FlatScene;
 /// 0.55 at 256 iterations, against 1.9e-3 at 0.01 and 3.6e-3 at 0.003): the bias is set by the
 /// disk's size in the scene, not in pixels. A fixed share suits the CPU at both sizes, where
 /// the variance of a merge per unit time does not depend on N (4x the photons a disk, 1/4 the
-/// iterations). At 0.01 the tests' 32x32 renders improve too: relMSE on the caustic at 256 →
-/// 1024 iterations 1.9e-3 → 4.9e-4 (vcm; 3.6e-3 → 1.1e-3 at 0.003), sppm at 128 → 512
-/// iterations 4.4e-2 → 1.6e-2 (about 0.5 at 0.003).
+/// iterations). At 0.01 the tests' 32x32 renders mostly improve too: relMSE on the caustic at
+/// 256 → 1024 iterations 1.9e-3 → 4.9e-4 (vcm; 3.6e-3 → 1.1e-3 at 0.003), sppm at 128 → 512
+/// iterations 4.4e-2 → 1.6e-2 (about 0.5 at 0.003); vcm on glass_room at 128 → 512 iterations
+/// 4.1e-3 → 9.2e-4, against 3.3e-3 → 8.3e-4 at 0.003.
 ///
 /// The wider disk pays less as the iterations grow: the squared bias falls as n^(2α − 2), the
 /// variance as n^−α, so long renders become bias-bound (0.84 at 120 s against 0.77 at 30 s;
