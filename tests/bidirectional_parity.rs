@@ -7,7 +7,7 @@
 //! (`parity_of_iterations`, which counts that covariance). Power: a GPU whose mirrors and glass
 //! pass 10 % less light is rejected on tncg15_room.
 
-use crate::common::parity::{parity_of_iterations, Parity};
+use crate::common::parity::{gpu_against_cpu_iterations, Parity};
 use crate::common::*;
 use hexray::cpu::Faults;
 use hexray::merging::MergeRadius;
@@ -21,26 +21,9 @@ fn cpu_against_gpu(
     iterations: u32,
     gpu_faults: Faults,
 ) -> Option<Parity> {
-    let gpu = gpu()?;
     // Light tracing and BDPT do not merge: the radius is not used.
-    let (_, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat);
-    let a = render_cpu_iterations(
-        rel,
-        SIZE,
-        SIZE,
-        iterations,
-        80,
-        method,
-        radius,
-        Faults::NONE,
-    );
-    let b = render_gpu_iterations(
-        gpu, rel, SIZE, SIZE, iterations, 81, method, radius, gpu_faults,
-    );
-    let p = parity_of_iterations(&a, &b);
-    eprintln!("{method} {rel}, {iterations} iterations, GPU against CPU: {p}");
-    Some(p)
+    let radius = MergeRadius::default_for(&load(rel).1);
+    gpu_against_cpu_iterations(rel, SIZE, iterations, method, radius, gpu_faults)
 }
 
 fn assert_same(rel: &str, method: Method, iterations: u32) {

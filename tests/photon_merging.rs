@@ -3,7 +3,7 @@
 //! exactly (the grid finds what brute force finds; VCM without merging is BDPT; the GPU computes
 //! the CPU's estimator on the same random streams), or convergence as the radius shrinks.
 
-use crate::common::parity::{parity_of_iterations, Parity};
+use crate::common::parity::{gpu_against_cpu_iterations, Parity};
 use crate::common::reference;
 use crate::common::*;
 use glam::Vec3;
@@ -252,18 +252,12 @@ fn the_convergence_check_rejects_a_ball_kernel() {
 /// overall, and image-mean ratios within 4 s.e. Pixels within a merge radius of each other
 /// merge the same photons, so each standard error comes from the scatter of the iterations'
 /// block and image means (`parity_of_iterations`), not from pixel variances summed as if
-/// independent (`tests/bidirectional_parity.rs`'s statistic, which claimed too little at a
-/// wider disk and rejected sppm at 0.01 of the scene radius: one block at p = 1.5e-5, the same
-/// on lavapipe and an NVIDIA H200).
+/// independent (`parity`'s statistic, which claimed too little at a wider disk and rejected
+/// sppm at 0.01 of the scene radius: one block at p = 1.5e-5, the same on lavapipe and an
+/// NVIDIA H200).
 fn gpu_parity(rel: &str, method: Method, gpu_faults: Faults) -> Option<Parity> {
-    let gpu = gpu()?;
-    let (_, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat);
-    let a = render_cpu_iterations(rel, 64, 64, 48, 80, method, radius, Faults::NONE);
-    let b = render_gpu_iterations(gpu, rel, 64, 64, 48, 81, method, radius, gpu_faults);
-    let p = parity_of_iterations(&a, &b);
-    eprintln!("{method} {rel}, GPU against CPU, batch means: {p}");
-    Some(p)
+    let radius = MergeRadius::default_for(&load(rel).1);
+    gpu_against_cpu_iterations(rel, 64, 48, method, radius, gpu_faults)
 }
 
 fn gpu_matches_cpu(rel: &str, method: Method) {

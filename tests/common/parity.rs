@@ -74,6 +74,27 @@ pub fn parity_of_iterations(a: &[Film], b: &[Film]) -> Parity {
     compare(&a, &b, a.grand_mean(), b.grand_mean())
 }
 
+/// [`parity_of_iterations`] between a CPU render (seed 80) and a GPU render (seed 81, with
+/// `gpu_faults`) of `iterations` iterations of `method` at `size` x `size`, each iteration
+/// rendered alone; None without a GPU. The GPU = CPU tests of every method that splats or
+/// merges (light, bdpt, sppm, vcm) use it.
+pub fn gpu_against_cpu_iterations(
+    rel: &str,
+    size: u32,
+    iterations: u32,
+    method: Method,
+    radius: hexray::merging::MergeRadius,
+    gpu_faults: Faults,
+) -> Option<Parity> {
+    let gpu = super::gpu()?;
+    let (w, n) = (size, iterations);
+    let a = super::render_cpu_iterations(rel, w, w, n, 80, method, radius, Faults::NONE);
+    let b = super::render_gpu_iterations(gpu, rel, w, w, n, 81, method, radius, gpu_faults);
+    let p = parity_of_iterations(&a, &b);
+    eprintln!("{method} {rel}, {n} iterations, GPU against CPU, batch means: {p}");
+    Some(p)
+}
+
 /// The `b` x `b` block means of each iteration's film, each block's taken as one sample of a
 /// film whose pixels are the blocks, and each iteration's image mean as one of its
 /// `iteration_means`: that film's pixel means and variances of the mean are the batch means
