@@ -5,8 +5,9 @@
 // light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
 // rouletted by its contribution; BDPT's next-event estimation also aims at the light's image in
 // each planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With
-// photons, the camera pass of the merging methods: VCM adds the merges at every diffuse vertex
-// (hash_grid.wgsl), SPPM merges at the first diffuse vertex alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
+// photons, the camera pass of the merging methods: vcm-full adds the merges at every diffuse
+// vertex (hash_grid.wgsl); vcm ends the camera subpath at its first diffuse vertex, after its
+// connections and merge there; SPPM merges at the first diffuse vertex alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
 // rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
 // then sums each subpath's terms in the order met, which gives the same sums.
 
@@ -251,10 +252,11 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                     q_merge = 1.0;
                 }
                 radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization / q_merge);
-                if !connects() {
-                    // SPPM merges at the first diffuse vertex only.
-                    break;
-                }
+            }
+            if !iteration_merge().camera_goes_on {
+                // SPPM and VCM end the camera subpath at its first diffuse vertex
+                // (subpath.rs, "VCM at the first diffuse vertex").
+                break;
             }
         }
 

@@ -77,7 +77,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     let rr_start = select(
         RR_START_BOUNCE,
         LIGHT_SUBPATH_RR_START_BOUNCE,
-        frame.method == METHOD_BDPT || frame.method == METHOD_VCM,
+        frame.method == METHOD_BDPT || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL,
     );
     let camera = frame.camera;
     atomicStore(&tallies[path_head(path)], NO_VERTEX);
@@ -119,7 +119,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
     // Next-event estimation through planar mirrors takes the paths whose light end is the light
     // point, a planar mirror and a diffuse vertex (BDPT; planar_mirror.wgsl): the primitive of
     // this subpath's first hit tells.
-    let through_mirrors = takes_mirror_light(frame.method == METHOD_BDPT || frame.method == METHOD_VCM);
+    let through_mirrors = takes_mirror_light(frame.method == METHOD_BDPT || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL);
     var first_prim = PRIM_PADDING;
 
     loop {

@@ -93,7 +93,7 @@ struct Frame {
     light_samples: u32,
     // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
     grey_indirect: u32,
-    // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM or METHOD_VCM.
+    // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM, METHOD_VCM or METHOD_VCM_FULL.
     method: u32,
     // N: light subpaths per iteration (one per pixel).
     n_light_paths: u32,
@@ -122,13 +122,15 @@ struct Frame {
     wave_origin: u32,
     // Test-only: a subpath goes on past a hit whose density vanishes (`Faults`), 0 or 1.
     continue_at_vanishing_density: u32,
-    // tau of VCM's Russian roulette on merge queries (0 but for VCM).
+    // tau of VCM's Russian roulette on merge queries (0 but for vcm and vcm-full).
     merge_rr_threshold: f32,
     // Test-only: merge queries rouletted but not divided by their probability, 0 or 1.
     merge_rr_undivided: u32,
     // How many of planar_mirrors the scene has.
     planar_mirror_count: u32,
-    pad: u32,
+    // Whether the camera subpaths go on past their first diffuse vertex (`MergeMis`), 0 or 1:
+    // 1 but for SPPM and vcm that merges.
+    camera_goes_on: u32,
     // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }
@@ -138,6 +140,7 @@ const METHOD_LIGHT: u32 = 1u;
 const METHOD_BDPT: u32 = 2u;
 const METHOD_SPPM: u32 = 3u;
 const METHOD_VCM: u32 = 4u;
+const METHOD_VCM_FULL: u32 = 5u;
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).
 struct PixelSums {

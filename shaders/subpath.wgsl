@@ -58,16 +58,17 @@ fn mis(x: f32) -> f32 {
 struct MergeMis {
     vm: f32,
     vc: f32,
+    camera_goes_on: bool,
 }
 
 // This iteration's merging constants (both 0 but for SPPM and VCM).
 fn iteration_merge() -> MergeMis {
-    return MergeMis(frame.merge_vm, frame.merge_vc);
+    return MergeMis(frame.merge_vm, frame.merge_vc, frame.camera_goes_on != 0u);
 }
 
 // Whether this iteration merges photons (SPPM, VCM, at a radius above 0).
 fn merges() -> bool {
-    return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM) && frame.merge_normalization > 0.0;
+    return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL) && frame.merge_normalization > 0.0;
 }
 
 // Georgiev's recursive quantities of one subpath vertex (`SubpathMis`).
@@ -136,21 +137,35 @@ fn weight_emission(camera: SubpathMis, pdf_area: f32, pdf_dir: f32) -> f32 {
 
 // s = 1: next-event estimation from a camera vertex.
 fn weight_next_event(camera: SubpathMis, merge: MergeMis, pdf_bsdf: f32, pdf_light: f32, pdf_emit: f32, pdf_rev: f32) -> f32 {
-    let w_light = mis(pdf_bsdf / pdf_light);
+    // The camera subpath that goes on from the vertex and hits the emitter.
+    var w_light = 0.0;
+    if merge.camera_goes_on {
+        w_light = mis(pdf_bsdf / pdf_light);
+    }
     let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev) + merge.vm);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // s >= 2, t >= 2: a camera vertex connected to a stored light vertex.
 fn weight_connection(camera: SubpathMis, light: SubpathMis, merge: MergeMis, camera_to_light: f32, camera_rev: f32, light_to_camera: f32, light_rev: f32) -> f32 {
-    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    // The camera subpath that goes on from the camera vertex to the light vertex and beyond.
+    var w_light = 0.0;
+    if merge.camera_goes_on {
+        w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    }
     let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev) + merge.vm);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // t = 1: a light vertex connected to the camera.
 fn weight_to_camera(light: SubpathMis, merge: MergeMis, pdf_camera: f32, n_light_paths: f32, light_rev: f32) -> f32 {
-    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    // The camera subpaths that take the vertex as their first and connect (d_vcm) or merge
+    // (vm) there, and those that go on from it (d_vc).
+    var beyond = 0.0;
+    if merge.camera_goes_on {
+        beyond = light.d_vc * mis(light_rev);
+    }
+    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + beyond + merge.vm);
     return 1.0 / (w_light + 1.0);
 }
 
@@ -167,7 +182,13 @@ fn weight_light_point_to_camera(pdf_camera: f32, n_light_paths: f32, pdf_area: f
 // The light side's part of weight_merge's denominator, which does not depend on the camera
 // vertex (the CPU computes it once per photon: cpu/bdpt.rs, PhotonRecord).
 fn merge_light_share(light: SubpathMis, merge: MergeMis, camera_to_light: f32) -> f32 {
-    return light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light);
+    // The connection at the camera vertex (d_vcm), and the strategies whose camera subpath
+    // goes on to the photon's previous vertex and beyond (d_vm).
+    var beyond = 0.0;
+    if merge.camera_goes_on {
+        beyond = light.d_vm * mis(camera_to_light);
+    }
+    return light.d_vcm * merge.vc + beyond;
 }
 
 // The camera side's part of weight_merge's denominator, which does not depend on the photon.

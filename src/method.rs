@@ -20,11 +20,18 @@ pub enum Method {
     /// the photons (light vertices) of the iteration within a radius that shrinks over
     /// iterations. Consistent, not unbiased: the bias vanishes as the radius does.
     Sppm,
-    /// Vertex connection and merging (`src/cpu/bdpt.rs` with merging): BDPT's strategies (next-
-    /// event estimation through planar mirrors only with `--radius 0`, where vcm is bdpt) and
-    /// photon merging at every diffuse camera vertex, all weighed by MIS. Consistent, not
-    /// unbiased.
+    /// Vertex connection and merging at the first diffuse vertex (`src/cpu/bdpt.rs` with
+    /// merging): each camera subpath follows mirrors and glass to its first diffuse vertex and
+    /// ends there after next-event estimation, a connection to each vertex of its light
+    /// subpath and a merge with the iteration's photons, all weighed by MIS with light tracing
+    /// over exactly those strategies (`crate::subpath`). Consistent, not unbiased. With
+    /// `--radius 0` it is bdpt.
     Vcm,
+    /// Vertex connection and merging as published (Georgiev et al. 2012; `src/cpu/bdpt.rs`
+    /// with merging): BDPT's strategies (next-event estimation through planar mirrors only with
+    /// `--radius 0`, where it is bdpt) and photon merging at every diffuse camera vertex, all
+    /// weighed by MIS. Consistent, not unbiased.
+    VcmFull,
 }
 
 impl Method {
@@ -56,6 +63,7 @@ impl Method {
             Method::Bdpt => "bdpt",
             Method::Sppm => "sppm",
             Method::Vcm => "vcm",
+            Method::VcmFull => "vcm-full",
         }
     }
 
@@ -77,13 +85,13 @@ impl Method {
     /// Whether the method merges photons: consistent rather than unbiased, with a bias that
     /// the film's standard error does not cover and that vanishes as the radius shrinks.
     pub fn merges(self) -> bool {
-        matches!(self, Method::Sppm | Method::Vcm)
+        matches!(self, Method::Sppm | Method::Vcm | Method::VcmFull)
     }
 
     /// Whether the method connects camera vertices to light vertices and emitters (BDPT's
     /// strategies).
     pub fn connects(self) -> bool {
-        matches!(self, Method::Bdpt | Method::Vcm)
+        matches!(self, Method::Bdpt | Method::Vcm | Method::VcmFull)
     }
 }
 

@@ -26,6 +26,26 @@
 //! report), as vm = η^β and vc = η^−β; without merging both are 0 and the quantities are
 //! BDPT's exactly (every vm and vc term adds or multiplies a 0).
 //!
+//! VCM at the first diffuse vertex (`vcm`, the default; `vcm-full` is Georgiev et al.'s as
+//! published): the camera subpath follows mirrors and glass to its first diffuse vertex, as
+//! SPPM's does, and ends there, after next-event estimation, a connection to each vertex of its
+//! light subpath and a merge. A path x0 … xk whose first diffuse vertex seen from the camera is
+//! xd can then be made by the connection at xd (t = d + 1, next-event estimation where s = 1),
+//! the merge at xd, light tracing where d = 1, and emission where the camera meets the emitter
+//! before any diffuse vertex; every strategy whose camera subpath would go on past xd is gone.
+//! Those are the terms on the light side of a connection (and of next-event estimation), the
+//! light vertex's d_vc in light tracing and its d_vm in a merge, all of which a camera subpath
+//! that went on would have made; the weights leave them out when `MergeMis::camera_goes_on` is
+//! false, and the rest are a partition of unity over exactly the strategies taken
+//! (`tests/mis_weights.rs`). The camera side needs no change: before xd its vertices are
+//! specular, where nothing connects or merges. Every path with a diffuse vertex keeps the merge
+//! (the photon arrives at xd whatever lies beyond), so the method stays consistent; with the
+//! radius 0 it is BDPT, whose camera subpaths go on. Why: at the default radius the merge at
+//! the first diffuse vertex carries most of the weight of the paths through it, and a camera
+//! subpath that goes on pays for connections and merges further on, whose share is small and
+//! noisy (a one-sample final gather); ending there doubles the iterations in the same time
+//! (docs/methods.md).
+//!
 //! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
 //! emitters weigh alike in both methods), and where one strategy is much better than the others,
 //! which is the rule here (light tracing for caustics seen directly, camera paths for the room
@@ -89,7 +109,7 @@ pub const SPECULAR_CAMERA_SUBPATHS_MERGING: u32 = 2;
 /// [`SPECULAR_CAMERA_SUBPATHS_MERGING`], every other method [`SPECULAR_CAMERA_SUBPATHS`], so
 /// VCM with the radius 0 is BDPT in this too.
 pub fn specular_camera_subpaths(method: Method, radius: f32) -> u32 {
-    if method == Method::Vcm && radius > 0.0 {
+    if matches!(method, Method::Vcm | Method::VcmFull) && radius > 0.0 {
         SPECULAR_CAMERA_SUBPATHS_MERGING
     } else {
         SPECULAR_CAMERA_SUBPATHS
@@ -238,27 +258,42 @@ pub const NO_VERTEX: u32 = u32::MAX;
 /// The constants that merging adds to the MIS weights of an iteration: `vm` = η^β weighs the
 /// merging strategies against a connection, `vc` = η^−β a connection against merging, with
 /// η = π r² N (see the module comment). Both 0 without merging (BDPT).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+///
+/// `camera_goes_on` says whether the camera subpaths go on past their first diffuse vertex
+/// (BDPT, `vcm-full`). Where they end there (`vcm`; SPPM, whose weights are 1), every strategy
+/// whose camera subpath would have a diffuse vertex before its last one does not exist, and
+/// the weights leave it out (see "VCM at the first diffuse vertex" in the module comment).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MergeMis {
     pub vm: f32,
     pub vc: f32,
+    pub camera_goes_on: bool,
 }
 
 impl MergeMis {
     /// No merging: BDPT's weights.
-    pub const NONE: MergeMis = MergeMis { vm: 0.0, vc: 0.0 };
+    pub const NONE: MergeMis = MergeMis {
+        vm: 0.0,
+        vc: 0.0,
+        camera_goes_on: true,
+    };
 
-    /// The constants of an iteration that merges within `radius` among `n_light_paths` light
-    /// subpaths, with connections (`connects`, VCM) or without (SPPM, whose merges are its
-    /// only strategy and whose weights are 1).
-    pub fn new(radius: f32, n_light_paths: u32, connects: bool) -> MergeMis {
+    /// The constants of an iteration of `method` that merges within `radius` among
+    /// `n_light_paths` light subpaths: with connections (VCM) or without (SPPM, whose merges are
+    /// its only strategy and whose weights are 1). A radius of 0 is BDPT's ([`MergeMis::NONE`]).
+    pub fn new(radius: f32, n_light_paths: u32, method: Method) -> MergeMis {
         if radius <= 0.0 {
             return MergeMis::NONE;
         }
         let eta = std::f32::consts::PI * radius * radius * n_light_paths as f32;
         MergeMis {
             vm: mis(eta),
-            vc: if connects { mis(1.0 / eta) } else { 0.0 },
+            vc: if method.connects() {
+                mis(1.0 / eta)
+            } else {
+                0.0
+            },
+            camera_goes_on: method == Method::VcmFull,
         }
     }
 }
@@ -370,7 +405,12 @@ pub fn weight_next_event(
     pdf_emit: f32,
     pdf_rev: f32,
 ) -> f32 {
-    let w_light = mis(pdf_bsdf / pdf_light);
+    // The camera subpath that goes on from the vertex and hits the emitter.
+    let w_light = if merge.camera_goes_on {
+        mis(pdf_bsdf / pdf_light)
+    } else {
+        0.0
+    };
     let w_camera = mis(pdf_emit) * (camera.d_vcm + camera.d_vc * mis(pdf_rev) + merge.vm);
     1.0 / (w_light + 1.0 + w_camera)
 }
@@ -391,7 +431,12 @@ pub fn weight_connection(
     light_to_camera: f32,
     light_rev: f32,
 ) -> f32 {
-    let w_light = mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    // The camera subpath that goes on from the camera vertex to the light vertex and beyond.
+    let w_light = if merge.camera_goes_on {
+        mis(camera_to_light) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm)
+    } else {
+        0.0
+    };
     let w_camera = mis(light_to_camera) * (camera.d_vcm + camera.d_vc * mis(camera_rev) + merge.vm);
     1.0 / (w_light + 1.0 + w_camera)
 }
@@ -408,8 +453,14 @@ pub fn weight_to_camera(
     n_light_paths: f32,
     light_rev: f32,
 ) -> f32 {
-    let w_light =
-        mis(pdf_camera / n_light_paths) * (light.d_vcm + light.d_vc * mis(light_rev) + merge.vm);
+    // The camera subpaths that take the vertex as their first and connect (d_vcm) or merge
+    // (vm) there, and those that go on from it (d_vc).
+    let beyond = if merge.camera_goes_on {
+        light.d_vc * mis(light_rev)
+    } else {
+        0.0
+    };
+    let w_light = mis(pdf_camera / n_light_paths) * (light.d_vcm + beyond + merge.vm);
     1.0 / (w_light + 1.0)
 }
 
@@ -446,7 +497,14 @@ pub fn weight_merge(
 /// iteration (`cpu::bdpt::PhotonRecord`).
 #[inline]
 pub fn merge_light_share(light: &SubpathMis, merge: &MergeMis, camera_to_light: f32) -> f32 {
-    light.d_vcm * merge.vc + light.d_vm * mis(camera_to_light)
+    // The connection at the camera vertex (d_vcm), and the strategies whose camera subpath
+    // goes on to the photon's previous vertex and beyond (d_vm).
+    let beyond = if merge.camera_goes_on {
+        light.d_vm * mis(camera_to_light)
+    } else {
+        0.0
+    };
+    light.d_vcm * merge.vc + beyond
 }
 
 /// The camera side's part of [`weight_merge`]'s denominator: the strategies that connect or

@@ -120,7 +120,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merge_rr_threshold,
             merge_rr_undivided,
             planar_mirror_count,
-            pad,
+            camera_goes_on,
             planar_mirrors
         }),
         rust_layout!(PlanarMirror {

@@ -287,8 +287,8 @@ fn sums(
     sums_with(rel, walks, length, left_out, 0.0)
 }
 
-/// [`sums`] with merging within `radius` times the scene's bounding-sphere radius (0: BDPT);
-/// `left_out` MERGE leaves every merge out.
+/// [`sums`] with merging within `radius` times the scene's bounding-sphere radius (0: BDPT),
+/// for `vcm-full`; `left_out` MERGE leaves every merge out.
 fn sums_with(
     rel: &str,
     walks: u32,
@@ -296,16 +296,50 @@ fn sums_with(
     left_out: Option<usize>,
     radius: f32,
 ) -> (usize, usize, bool, f32) {
+    sums_of(
+        rel,
+        walks,
+        length,
+        left_out,
+        radius,
+        Method::VcmFull,
+        Method::VcmFull,
+    )
+}
+
+/// The camera subpath's last vertex (its index among x0 … xk) in strategy `s` of a path of
+/// `k` bounces: x(k−s) for a connection (s = 0: the emitter it hits), x_j for a merge there.
+fn camera_end(s: usize, k: usize) -> usize {
+    if s >= MERGE {
+        s - MERGE
+    } else {
+        k - s
+    }
+}
+
+/// [`sums_with`] for `method` (`vcm` or `vcm-full`), with the weights of `weights_of`: for
+/// `vcm`, whose camera subpaths end at their first diffuse vertex x_d, the strategies are those
+/// whose camera subpath ends at or before x_d (`camera_end` ≤ d: the connection and merge at
+/// x_d, light tracing, emission met before any diffuse vertex).
+fn sums_of(
+    rel: &str,
+    walks: u32,
+    length: usize,
+    left_out: Option<usize>,
+    radius: f32,
+    method: Method,
+    weights_of: Method,
+) -> (usize, usize, bool, f32) {
     let merge = MergeMis::new(
         radius * hexray::merging::scene_radius(&load(rel).1),
         SIZE * SIZE,
-        true,
+        weights_of,
     );
     let (scene, flat) = load(rel);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
     let n_c = camera_subpaths(
         &specular_pixels(&flat, &camera),
-        specular_camera_subpaths(Method::Vcm, radius),
+        specular_camera_subpaths(method, radius),
     );
     let (mut paths, mut longest, mut specular, mut worst) = (0, 0, false, 0.0f32);
     for index in 0..walks {
@@ -316,8 +350,11 @@ fn sums_with(
             if path[end - 1].emitter.is_none() {
                 continue;
             }
+            // x_d, the first diffuse vertex (x1 is path[0]); past the path's end if none.
+            let first_diffuse = 1 + path.iter().position(|v| v.diffuse).unwrap_or(end);
             let total: f32 = strategy_weights(&flat, &camera, path, n_c, &merge)
                 .iter()
+                .filter(|(s, _)| method == Method::VcmFull || camera_end(*s, end) <= first_diffuse)
                 .filter(|(s, _)| match left_out {
                     Some(MERGE) => *s < MERGE,
                     other => Some(*s) != other,
@@ -415,5 +452,72 @@ fn mis_weight_check_rejects_missing_merges() {
     assert!(
         worst > 1e-2,
         "worst |Σw − 1| = {worst:e} without the merges"
+    );
+}
+
+/// vcm, whose camera subpaths end at their first diffuse vertex: its weights sum to 1 over the
+/// strategies it takes (the connection and the merge at that vertex, light tracing, emission
+/// met through mirrors), on paths through the room's mirrors.
+#[test]
+fn first_diffuse_vcm_weights_sum_to_one_on_tncg15_rooms_paths() {
+    let (paths, _, specular, worst) = sums_of(
+        "scenes/tncg15_room.json",
+        6000,
+        12,
+        None,
+        0.02,
+        Method::Vcm,
+        Method::Vcm,
+    );
+    assert!(paths > 150 && specular, "too few paths");
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+#[test]
+fn first_diffuse_vcm_weights_sum_to_one_on_glass_rooms_paths() {
+    let (paths, _, specular, worst) = sums_of(
+        "scenes/glass_room.json",
+        6000,
+        12,
+        None,
+        0.02,
+        Method::Vcm,
+        Method::Vcm,
+    );
+    assert!(paths > 150 && specular, "too few paths");
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+#[test]
+fn first_diffuse_vcm_weights_sum_to_one_on_paths_of_sixty_bounces() {
+    let (_, longest, _, worst) = sums_of(
+        "scenes/furnace/diffuse_0_95.json",
+        100,
+        60,
+        None,
+        0.02,
+        Method::Vcm,
+        Method::Vcm,
+    );
+    assert!(longest == 60);
+    assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
+}
+
+/// The check has power: camera subpaths ended at their first diffuse vertex with vcm-full's
+/// weights (which count the strategies of the camera subpaths that go on) fall short of 1.
+#[test]
+fn mis_weight_check_rejects_first_diffuse_ends_with_full_vcm_weights() {
+    let (_, _, _, worst) = sums_of(
+        "scenes/tncg15_room.json",
+        2000,
+        12,
+        None,
+        0.02,
+        Method::Vcm,
+        Method::VcmFull,
+    );
+    assert!(
+        worst > 1e-2,
+        "worst |Σw − 1| = {worst:e} with vcm-full's weights"
     );
 }

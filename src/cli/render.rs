@@ -38,19 +38,19 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_enum)]
     pub(crate) scene_residency: Option<ResidencyChoice>,
     /// Light-transport method. `light` sees nothing through mirrors or glass (those surfaces
-    /// stay black); `light`, `bdpt`, `sppm` and `vcm` take one iteration (a light subpath and a
-    /// camera subpath per pixel) per sample. `sppm` and `vcm` merge photons: consistent, not
-    /// unbiased (the bias shrinks with the radius over iterations; the standard error does not
-    /// cover it). Default: vcm for `render` (the lowest error at equal time on the reference
-    /// scenes, docs/methods.md), path for `reference` (unbiased).
+    /// stay black); `light`, `bdpt`, `sppm`, `vcm` and `vcm-full` take one iteration (a light
+    /// subpath and a camera subpath per pixel) per sample. `sppm`, `vcm` and `vcm-full` merge
+    /// photons: consistent, not unbiased (the bias shrinks with the radius over iterations; the
+    /// standard error does not cover it). Default: vcm for `render` (the lowest error at equal
+    /// time on the reference scenes, docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
-    /// Initial merge radius r_1 of sppm and vcm, in scene units (default: 0.01 x the scene's
-    /// bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm with 0 is
-    /// bdpt.
+    /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units (default: 0.01 x the
+    /// scene's bounding-sphere radius). Iteration i merges within r_1 i^((alpha-1)/2). vcm and
+    /// vcm-full with 0 are bdpt.
     #[arg(long, value_parser = parse_radius)]
     pub(crate) radius: Option<f32>,
-    /// Radius reduction alpha of sppm and vcm, in (0, 1] (default 0.75; 1 keeps the radius).
+    /// Radius reduction alpha of sppm, vcm and vcm-full, in (0, 1] (default 0.75; 1 keeps the radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
@@ -142,7 +142,7 @@ pub(crate) fn merge_radius_of(
 ) -> std::result::Result<hexray::merging::MergeRadius, String> {
     if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
-            "--radius and --alpha are for --method sppm and vcm, not {method}"
+            "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
         ));
     }
     let mut r = hexray::merging::MergeRadius::default_for(flat);

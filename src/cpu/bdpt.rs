@@ -441,10 +441,11 @@ impl CameraPass<'_> {
                         throughput * albedo * gathered * (FRAC_1_PI * photons.normalization / q),
                         1.0,
                     );
-                    if !self.connects {
-                        // SPPM merges at the first diffuse vertex only.
-                        break;
-                    }
+                }
+                if !self.merge.camera_goes_on {
+                    // SPPM and VCM end the camera subpath at its first diffuse vertex
+                    // (`subpath`, "VCM at the first diffuse vertex").
+                    break;
                 }
             }
 
@@ -560,6 +561,7 @@ impl CameraTerms {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::method::Method;
     use crate::sampling::{pcg4d, u32_to_unit_f32};
     use crate::subpath::weight_merge;
 
@@ -569,10 +571,17 @@ mod tests {
     }
 
     /// A merge through a photon's record weighs it exactly as `subpath::weight_merge` does on
-    /// the vertex itself: the light side is the same f32 arithmetic, done once per photon.
+    /// the vertex itself: the light side is the same f32 arithmetic, done once per photon; for
+    /// vcm, whose camera subpaths end at their first diffuse vertex, without the photon's d_vm.
     #[test]
     fn a_merge_through_the_record_weighs_as_weight_merge() {
-        let merge = MergeMis::new(0.01, 512 * 512, true);
+        for method in [Method::VcmFull, Method::Vcm] {
+            records_weigh_as_weight_merge(method);
+        }
+    }
+
+    fn records_weigh_as_weight_merge(method: Method) {
+        let merge = MergeMis::new(0.01, 512 * 512, method);
         for i in 0..1000 {
             let n = Vec3::new(
                 rnd(i, 0, 2.0) - 1.0,
@@ -610,9 +619,14 @@ mod tests {
             let expected = weight_merge(&camera, &light, &merge, n.dot(wo) * FRAC_1_PI, pdf_rev);
             // Eqs. 37-39 written out, apart from the functions both sides share.
             let c = n.dot(wo) * FRAC_1_PI;
+            let beyond = if method == Method::VcmFull {
+                v.d_vm * (c * c)
+            } else {
+                0.0
+            };
             let written_out = 1.0
                 / (v.d_vcm * merge.vc
-                    + v.d_vm * (c * c)
+                    + beyond
                     + 1.0
                     + (camera.d_vcm * merge.vc + camera.d_vm * (pdf_rev * pdf_rev)));
             let record = PhotonRecord::new(&v, &merge, true);

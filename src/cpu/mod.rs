@@ -186,7 +186,7 @@ pub fn render_iterations(
         } else {
             0.0
         };
-        let merge = MergeMis::new(radius, n_paths, method.connects());
+        let merge = MergeMis::new(radius, n_paths, method);
         let pass = LightPass {
             scene,
             camera,

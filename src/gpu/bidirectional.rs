@@ -689,7 +689,7 @@ impl GpuRenderer {
                 // Merging's radius this iteration, its constants in the MIS weights and the
                 // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
                 let radius = b.merging.as_ref().map_or(0.0, |m| m.radius.at(s));
-                let merge = MergeMis::new(radius, pixels as u32, self.method.connects());
+                let merge = MergeMis::new(radius, pixels as u32, self.method);
                 let ball = b.merging.as_ref().is_some_and(|m| m.ball_kernel);
                 let normalization = kernel_normalization(radius, pixels as u32, ball);
                 let frame = Frame {
@@ -699,6 +699,7 @@ impl GpuRenderer {
                     vertex_capacity: b.capacity,
                     merge_vm: merge.vm,
                     merge_vc: merge.vc,
+                    camera_goes_on: merge.camera_goes_on as u32,
                     merge_normalization: normalization,
                     film_row: band_start,
                     film_rows: band_end - band_start,

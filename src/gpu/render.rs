@@ -74,7 +74,9 @@ pub struct Frame {
     pub merge_rr_undivided: u32,
     /// How many of `planar_mirrors` the scene has (`planar_mirror::find`).
     pub planar_mirror_count: u32,
-    pub pad: u32,
+    /// `subpath::MergeMis::camera_goes_on` of the iteration as 0 or 1: whether the camera
+    /// subpaths go on past their first diffuse vertex (1 but for SPPM and vcm that merges).
+    pub camera_goes_on: u32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
@@ -457,6 +459,7 @@ impl GpuRenderer {
                 Method::Bdpt => 2,
                 Method::Sppm => 3,
                 Method::Vcm => 4,
+                Method::VcmFull => 5,
             },
             n_light_paths: width * height,
             slot: 0,
@@ -477,14 +480,14 @@ impl GpuRenderer {
             band_pixels: width * height,
             wave_origin: 0,
             continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
-            merge_rr_threshold: if method == Method::Vcm {
+            merge_rr_threshold: if matches!(method, Method::Vcm | Method::VcmFull) {
                 crate::subpath::MERGE_RR_THRESHOLD
             } else {
                 0.0
             },
             merge_rr_undivided: faults.merge_rr_undivided as u32,
             planar_mirror_count: scene.planar_mirrors.len() as u32,
-            pad: 0,
+            camera_goes_on: 1,
             planar_mirrors: std::array::from_fn(|i| {
                 scene.planar_mirrors.get(i).copied().unwrap_or_default()
             }),
