@@ -89,11 +89,11 @@ run() {
             overlay=(--overlay "$dir/mitsuba.csv")
         fi
         echo "== $name: hexray $backends, path, light, bdpt, $seconds s each"
-        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt,sppm,vcm \
+        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt,sppm,vcm,vcm-full \
             --time "$seconds" --reference "$ref" "${overlay[@]}" --out "$dir"
         "$hexray" compare "$ref" "$ref" --json > "$dir/reference.json"
         echo "== $name: pictures, 10 s each"
-        for method in path light bdpt sppm vcm; do
+        for method in path light bdpt sppm vcm vcm-full; do
             "$hexray" render "$scene" --backend cpu --method "$method" --time 10 \
                 --width "$size" --height "$size" --seed 5 --out "out/methods/${name}_$method.exr" \
                 --quiet
@@ -101,7 +101,7 @@ run() {
         done
     done
     echo "== cost: hexray bench, 256x256, 32 samples or iterations"
-    "$hexray" bench --backend "${backends}" --method path,light,bdpt,sppm,vcm --spp 32 \
+    "$hexray" bench --backend "${backends}" --method path,light,bdpt,sppm,vcm,vcm-full --spp 32 \
         --out "$out/bench.json" > "$out/bench.txt"
     markdown
 }
@@ -156,8 +156,9 @@ print("budget, so its row is interpolated at the budget like hexray's). Measured
 print("not alternated: no ratio to Mitsuba is drawn here; the closing notes of the issues give")
 print("alternated ones. A row marked with a time is the value of a curve that ended before the budget.\n")
 print("Light tracing (`light`) sees nothing through a mirror or glass, so its error has a floor")
-print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere; SPPM (`sppm`) and VCM (`vcm`)")
-print("merge photons and are consistent, not unbiased (their error includes the merging bias). The methods themselves:")
+print("wherever the camera sees one; BDPT (`bdpt`) is unbiased everywhere; SPPM (`sppm`) and VCM (`vcm`, at each")
+print("camera subpath's first diffuse vertex, and `vcm-full`, as published) merge photons and are consistent, not")
+print("unbiased (their error includes the merging bias). The methods themselves:")
 print("`src/cpu/path.rs`, `src/cpu/light_path.rs`, `src/cpu/bdpt.rs` and `src/subpath.rs`.\n")
 summary = []
 for name, scene, ref, size in scenes:
@@ -193,7 +194,7 @@ for name, scene, ref, size in scenes:
         print(f"| {b}{when} | {fmt(v)} | {fmt(c)} | {'–' if ratio is None else f'{ratio:.2f}'} |")
         summary.append((name, b, c, ratio))
     print()
-    pics = [m for m in ("path", "light", "bdpt", "sppm", "vcm") if os.path.exists(f"{out}/{name}/{m}.png")]
+    pics = [m for m in ("path", "light", "bdpt", "sppm", "vcm", "vcm-full") if os.path.exists(f"{out}/{name}/{m}.png")]
     if pics:
         print("Pictures, 10 s each on the CPU backend: " + ", ".join(pics) + ".\n")
         print("| " + " | ".join(pics) + " |")
@@ -209,7 +210,7 @@ if rows:
     print(f"reference scenes on each backend (relMSE at {budget:.0f} s minus the reference's noise, as")
     print("above; ratio to the backend's path tracer, and its geometric mean over the scenes):\n")
     backends = sorted({b.split()[1] for _, b, _, _ in rows})
-    methods = ["path", "light", "bdpt", "sppm", "vcm"]
+    methods = ["path", "light", "bdpt", "sppm", "vcm", "vcm-full"]
     print("| backend | method | " + " | ".join(refscenes) + " | geometric mean |")
     print("| --- | --- | " + " | ".join("---" for _ in refscenes) + " | --- |")
     for be in backends:
@@ -241,6 +242,18 @@ if rows:
     print("path at 256x256 (geometric mean 0.96) and sppm 0.78, 0.82 and 27 (2.6): on a hardware GPU vcm")
     print("leads, where on lavapipe, above, sppm does. The GPU backend is meant for hardware GPUs, and its")
     print("default follows them: vcm on both backends.\n")
+    print("Runs of this page before 2026-11-27 14:00 UTC (build cdd2a5f) measured VCM as published")
+    print("under the name `vcm`: that method is now `vcm-full`, and `vcm` ends each camera subpath at its")
+    print("first diffuse vertex ([docs/performance.md](performance.md#vcm-at-the-first-diffuse-vertex-kept-2026-11-27)).")
+    print("Measured after that change, not by this script: on the CPU at 30 s (256x256, seed 11) vcm had")
+    print("0.64, 0.66 and 0.79 of vcm-full's relMSE on the three scenes, and against Mitsuba's `path` in")
+    print("one alternated run 0.061 and 0.047 on tncg15_room and glass_room, below sppm (0.079, 0.056)")
+    print("and bdpt (0.146, 0.091) ([docs/bench](bench/methods_vs_mitsuba_2026-11-27_first_diffuse.md));")
+    print("on lavapipe (30 s, one render each) vcm 0.036, 0.028 and 1.94 of path (geometric mean 0.126),")
+    print("sppm 0.037, 0.022 and 2.27 (0.123), vcm-full 0.230 ([docs/bench](bench/methods_equal_time_2026-11-27_lavapipe.md));")
+    print("on the H200 at 256x256 (6 s) vcm 0.75 by the geometric mean, vcm-full 0.91, sppm 2.47, and")
+    print("at 512x512 (4 s) vcm 1.10, vcm-full 0.88, sppm 1.53 ([docs/gpu.md](gpu.md#on-a-hardware-gpu-nvidia-h200)).")
+    print("So vcm is the default on both backends.\n")
 if os.path.exists(f"{out}/readme_default.json"):
     print("## The README's picture\n")
     print("`hexray render` with its defaults (tncg15_room, 512x512, CPU), the old default (path, 64 spp)")

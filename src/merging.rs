@@ -118,6 +118,11 @@ use crate::flat::FlatScene;
 /// iterations in 4 s (the table above); on such a GPU a render of thousands of iterations is
 /// better served by `--radius` at 0.003 of the scene radius or by a smaller `--alpha`. α = 2/3,
 /// where the two rates meet, did not do better within 120 s.
+///
+/// Measured again when vcm came to end its camera subpaths at their first diffuse vertex
+/// (build cdd2a5f, 256x256, 30 s, seed 11, `benches/merge_radius.sh`; ratio to 0.01's):
+/// 0.0075 gave 1.02, 1.00 and 1.00 on tncg15_room, glass_room and cornell_box, 0.015 gave 1.12,
+/// 1.20 and 1.19. So 0.01 stays.
 pub const DEFAULT_RADIUS_FACTOR: f32 = 0.01;
 
 /// The default α: SmallVCM's and Knaus and Zwicker's 0.75.

@@ -37,21 +37,25 @@ pub enum Method {
 impl Method {
     /// `hexray render`'s method when none is given: the one with the lowest relMSE at equal
     /// time on the three reference scenes on each backend (docs/methods.md, "The default
-    /// method"), the GPU backend's judged on a hardware GPU (an NVIDIA H200: vcm 0.96 of path
-    /// by the geometric mean, sppm 2.6), not on lavapipe, where sppm leads since the merge
-    /// radius's default went to 0.01. Consistent, not unbiased: the summary line says so, and
-    /// `hexray reference` keeps path tracing.
+    /// method"), the GPU backend's judged on a hardware GPU: on an NVIDIA H200 at 256x256
+    /// (6 s) vcm had 0.75 of path's relMSE by the geometric mean, vcm-full 0.91 and sppm 2.47
+    /// (docs/gpu.md); on lavapipe (30 s) vcm and sppm are level (0.126 and 0.123, one render
+    /// each). Consistent, not unbiased: the summary line says so, and `hexray reference` keeps
+    /// path tracing.
     pub const DEFAULT: Method = Method::Vcm;
 
-    /// Samples (iterations) when neither `--spp` nor `--time` is given: 64 of path tracing, 8
-    /// of the methods that trace a light subpath and a camera subpath per pixel and iteration,
-    /// which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost more as the
-    /// image grows, since every pixel adds a photon), so that the default render (tncg15_room,
-    /// 512x512) takes about as long as before: measured 11.0 s for 64 spp of path tracing and
-    /// 11.9 s for 8 iterations of vcm on 2 cores (docs/methods.md).
+    /// Samples (iterations) when neither `--spp` nor `--time` is given, so that the default
+    /// render (tncg15_room, 512x512) takes about as long as path tracing's 64 samples: 64 of
+    /// path tracing; 20 of vcm, whose camera subpaths end at their first diffuse vertex (on 2
+    /// cores of an Intel Xeon VM, 2026-11-27: 64 spp of path in 9.98 s, 21 iterations of vcm in
+    /// 10.09 s; `docs/methods.sh readme`); 8 of the other methods that trace a light subpath
+    /// and a camera subpath per pixel and iteration, which cost 3-9x a path-traced sample
+    /// (`hexray bench`; VCM's merges cost more as the image grows, since every pixel adds a
+    /// photon).
     pub fn default_samples(self) -> u32 {
         match self {
             Method::Path => 64,
+            Method::Vcm => 20,
             _ => 8,
         }
     }

@@ -101,7 +101,10 @@ pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 /// | tncg15_room | 1.52e-3 (0.97) | 1.40e-3 (0.90) | 1.45e-3 (0.93) | 1.57e-3 |
 /// | glass_room | 1.66e-3 (1.06) | 1.48e-3 (0.95) | 1.46e-3 (0.93) | 1.57e-3 |
 ///
-/// 2 and 3 are within the runs' noise of each other; 2 costs less.
+/// 2 and 3 are within the runs' noise of each other; 2 costs less. Measured again when vcm's
+/// camera subpaths came to end at their first diffuse vertex, which makes them cheap (build
+/// cdd2a5f, seed 11, the same settings, against the run's own 2): 3 and 5 gave 1.02 and 1.06 of
+/// 2's relMSE on tncg15_room, 0.99 and 0.99 on glass_room. 2 stays.
 pub const SPECULAR_CAMERA_SUBPATHS_MERGING: u32 = 2;
 
 /// n_c where a pixel's centre ray first meets a mirror or glass, for `method` with the initial

@@ -33,7 +33,8 @@ pub(crate) struct BenchArgs {
     pub(crate) height: u32,
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u32,
-    /// Methods, comma-separated (path, light, bdpt): a row for each on every scene and backend.
+    /// Methods, comma-separated (path, light, bdpt, sppm, vcm, vcm-full): a row for each on
+    /// every scene and backend.
     #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
     pub(crate) method: Vec<Method>,
     /// Shadow rays per diffuse vertex (path tracing).

@@ -27,7 +27,8 @@ pub(crate) struct CurveArgs {
     /// Render-time budget per series, in seconds.
     #[arg(long, value_parser = parse_seconds, default_value = "10")]
     pub(crate) time: f64,
-    /// Methods, comma-separated (path, light, bdpt): one series per backend and method.
+    /// Methods, comma-separated (path, light, bdpt, sppm, vcm, vcm-full): one series per
+    /// backend and method.
     #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
     pub(crate) method: Vec<Method>,
     /// Shadow rays per diffuse vertex (path tracing); a comma-separated list gives one series
