@@ -44,7 +44,7 @@
 //! the first diffuse vertex carries most of the weight of the paths through it, and a camera
 //! subpath that goes on pays for connections and merges further on, whose share is small and
 //! noisy (a one-sample final gather); ending there doubles the iterations in the same time
-//! (docs/methods.md).
+//! (docs/performance.md, "VCM at the first diffuse vertex").
 //!
 //! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
 //! emitters weigh alike in both methods), and where one strategy is much better than the others,

@@ -455,50 +455,40 @@ fn mis_weight_check_rejects_missing_merges() {
     );
 }
 
+/// [`sums_of`] for vcm, merging within 0.02 of the scene's bounding-sphere radius, with the
+/// weights of `weights_of`.
+fn first_diffuse_sums(
+    rel: &str,
+    walks: u32,
+    length: usize,
+    weights_of: Method,
+) -> (usize, usize, bool, f32) {
+    sums_of(rel, walks, length, None, 0.02, Method::Vcm, weights_of)
+}
+
 /// vcm, whose camera subpaths end at their first diffuse vertex: its weights sum to 1 over the
 /// strategies it takes (the connection and the merge at that vertex, light tracing, emission
 /// met through mirrors), on paths through the room's mirrors.
 #[test]
 fn first_diffuse_vcm_weights_sum_to_one_on_tncg15_rooms_paths() {
-    let (paths, _, specular, worst) = sums_of(
-        "scenes/tncg15_room.json",
-        6000,
-        12,
-        None,
-        0.02,
-        Method::Vcm,
-        Method::Vcm,
-    );
+    let (paths, _, specular, worst) =
+        first_diffuse_sums("scenes/tncg15_room.json", 6000, 12, Method::Vcm);
     assert!(paths > 150 && specular, "too few paths");
     assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
 }
 
 #[test]
 fn first_diffuse_vcm_weights_sum_to_one_on_glass_rooms_paths() {
-    let (paths, _, specular, worst) = sums_of(
-        "scenes/glass_room.json",
-        6000,
-        12,
-        None,
-        0.02,
-        Method::Vcm,
-        Method::Vcm,
-    );
+    let (paths, _, specular, worst) =
+        first_diffuse_sums("scenes/glass_room.json", 6000, 12, Method::Vcm);
     assert!(paths > 150 && specular, "too few paths");
     assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
 }
 
 #[test]
 fn first_diffuse_vcm_weights_sum_to_one_on_paths_of_sixty_bounces() {
-    let (_, longest, _, worst) = sums_of(
-        "scenes/furnace/diffuse_0_95.json",
-        100,
-        60,
-        None,
-        0.02,
-        Method::Vcm,
-        Method::Vcm,
-    );
+    let (_, longest, _, worst) =
+        first_diffuse_sums("scenes/furnace/diffuse_0_95.json", 100, 60, Method::Vcm);
     assert!(longest == 60);
     assert!(worst < 1e-4, "worst |Σw − 1| = {worst:e}");
 }
@@ -507,15 +497,7 @@ fn first_diffuse_vcm_weights_sum_to_one_on_paths_of_sixty_bounces() {
 /// weights (which count the strategies of the camera subpaths that go on) fall short of 1.
 #[test]
 fn mis_weight_check_rejects_first_diffuse_ends_with_full_vcm_weights() {
-    let (_, _, _, worst) = sums_of(
-        "scenes/tncg15_room.json",
-        2000,
-        12,
-        None,
-        0.02,
-        Method::Vcm,
-        Method::VcmFull,
-    );
+    let (_, _, _, worst) = first_diffuse_sums("scenes/tncg15_room.json", 2000, 12, Method::VcmFull);
     assert!(
         worst > 1e-2,
         "worst |Σw − 1| = {worst:e} with vcm-full's weights"

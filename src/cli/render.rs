@@ -50,7 +50,8 @@ pub(crate) struct RenderArgs {
     /// vcm-full with 0 are bdpt.
     #[arg(long, value_parser = parse_radius)]
     pub(crate) radius: Option<f32>,
-    /// Radius reduction alpha of sppm, vcm and vcm-full, in (0, 1] (default 0.75; 1 keeps the radius).
+    /// Radius reduction alpha of sppm, vcm and vcm-full, in (0, 1] (default 0.75; 1 keeps the
+    /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
