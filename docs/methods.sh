@@ -252,7 +252,8 @@ if rows:
     print("on lavapipe (30 s, one render each) vcm 0.036, 0.028 and 1.94 of path (geometric mean 0.126),")
     print("sppm 0.037, 0.022 and 2.27 (0.123), vcm-full 0.230 ([docs/bench](bench/methods_equal_time_2026-11-27_lavapipe.md));")
     print("on the H200 at 256x256 (6 s) vcm 0.75 by the geometric mean, vcm-full 0.91, sppm 2.47, and")
-    print("at 512x512 (4 s) vcm 1.10, vcm-full 0.88, sppm 1.53 ([docs/gpu.md](gpu.md#on-a-hardware-gpu-nvidia-h200)).")
+    print("at 512x512 (4 s) vcm 1.10, vcm-full 0.88, sppm 1.53 at the radius of 0.01, and vcm 0.26 at 0.003")
+    print("of the scene radius, since then a hardware GPU's default ([docs/gpu.md](gpu.md#on-a-hardware-gpu-nvidia-h200)).")
     print("So vcm is the default on both backends.\n")
 if os.path.exists(f"{out}/readme_default.json"):
     print("## The README's picture\n")

@@ -184,6 +184,12 @@ pub fn make_backend<'a>(
                 method,
             )?;
             renderer.set_light_samples(light_samples);
+            if method.merges() {
+                let base = crate::merging::MergeRadius::default_for(flat);
+                renderer.set_merge_radius(crate::gpu::context::default_merge_radius(
+                    &g.info, flat, base,
+                ));
+            }
             let b = crate::gpu::GpuBackend {
                 renderer,
                 adapter: crate::gpu::context::describe(&g.info),

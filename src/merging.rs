@@ -116,7 +116,8 @@ use crate::flat::FlatScene;
 /// variance as n^−α, so long renders become bias-bound (0.84 at 120 s against 0.77 at 30 s;
 /// 0.015 lost most of its lead). That is what the H200 showed at 512x512 after some 450
 /// iterations in 4 s (the table above); on such a GPU a render of thousands of iterations is
-/// better served by `--radius` at 0.003 of the scene radius or by a smaller `--alpha`. α = 2/3,
+/// better served by 0.003 of the scene radius, a hardware GPU's default
+/// ([`HARDWARE_GPU_RADIUS_FACTOR`]), or by a smaller `--alpha`. α = 2/3,
 /// where the two rates meet, did not do better within 120 s.
 ///
 /// Measured again when vcm came to end its camera subpaths at their first diffuse vertex
@@ -124,6 +125,24 @@ use crate::flat::FlatScene;
 /// 0.0075 gave 1.02, 1.00 and 1.00 on tncg15_room, glass_room and cornell_box, 0.015 gave 1.12,
 /// 1.20 and 1.19. So 0.01 stays.
 pub const DEFAULT_RADIUS_FACTOR: f32 = 0.01;
+
+/// The merge radius's default on a hardware GPU, as a share of the scene's bounding-sphere
+/// radius: 0.003. Such a GPU runs tens to hundreds of times the iterations of the CPU backend in
+/// the same time (an H200: some 1300 of vcm at 512x512 in 4 s, against 21 on 2 CPU cores in
+/// 10 s), so its renders are long in iterations, and in long renders the squared bias of a wide
+/// disk outlasts the variance it saves (see [`DEFAULT_RADIUS_FACTOR`]). Measured on an NVIDIA H200
+/// (2026-11-27, vcm at its first diffuse vertex, seed 5, one render each, relMSE minus the
+/// references' noise as a ratio of 0.003's to 0.01's; docs/bench/2026-11-27_h200/):
+///
+/// | H200 | tncg15_room | glass_room | cornell_box |
+/// | --- | --- | --- | --- |
+/// | 256x256, 6 s (about 3600 – 8400 iterations) | 1.07 | 0.68 | 0.87 |
+/// | 512x512, 4 s (about 1200 – 2300 iterations) | 0.28 | 0.24 | 0.21 |
+///
+/// At 512x512, the default size, that makes vcm 0.26 of the GPU path tracer's relMSE by the
+/// geometric mean over the three scenes, against 1.09 at 0.01. A software adapter (lavapipe)
+/// runs about as many iterations as the CPU backend and keeps [`DEFAULT_RADIUS_FACTOR`].
+pub const HARDWARE_GPU_RADIUS_FACTOR: f32 = 0.003;
 
 /// The default α: SmallVCM's and Knaus and Zwicker's 0.75.
 pub const DEFAULT_ALPHA: f32 = 0.75;
@@ -149,6 +168,15 @@ impl MergeRadius {
         MergeRadius {
             initial: DEFAULT_RADIUS_FACTOR * scene_radius(scene),
             alpha: DEFAULT_ALPHA,
+        }
+    }
+
+    /// This radius with r_1 at the hardware GPU's default share of `scene`'s bounding-sphere
+    /// radius ([`HARDWARE_GPU_RADIUS_FACTOR`]), α kept.
+    pub fn for_hardware_gpu(self, scene: &FlatScene) -> MergeRadius {
+        MergeRadius {
+            initial: HARDWARE_GPU_RADIUS_FACTOR * scene_radius(scene),
+            ..self
         }
     }
 }

@@ -71,6 +71,22 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
     }
 }
 
+/// The merge radius a render on this adapter takes by default, from `base` (the CPU backend's
+/// default, with any `--alpha`): a hardware GPU's share of the scene
+/// (`merging::HARDWARE_GPU_RADIUS_FACTOR`), since its renders run many more iterations; a
+/// software adapter (lavapipe) keeps `base`.
+pub fn default_merge_radius(
+    info: &wgpu::AdapterInfo,
+    scene: &crate::flat::FlatScene,
+    base: crate::merging::MergeRadius,
+) -> crate::merging::MergeRadius {
+    if info.device_type == wgpu::DeviceType::Cpu {
+        base
+    } else {
+        base.for_hardware_gpu(scene)
+    }
+}
+
 /// One line about an adapter: name, type, backend, driver.
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
     format!(
