@@ -20,23 +20,14 @@ backend=${BACKEND:-cpu}
 out=${OUT:-out/methods_equal_time}
 mkdir -p "$out"
 
-# the reference and its noise (mean var_r / (r^2 + 0.01), `hexray compare`'s
-# relmse_reference_noise)
-scene_row() {
-    case $1 in
-    tncg15_room) echo "out/methods/refs/tncg15_room_256.exr 6.594e-5" ;;
-    glass_room) echo "out/methods/refs/glass_room_256.exr 8.69e-5" ;;
-    cornell_box) echo "tests/data/references/cornell_box_256.npy 2.15e-5" ;;
-    *) echo "unknown scene $1" >&2; exit 2 ;;
-    esac
-}
+. benches/reference_scenes.sh
 
 rows=$out/rows.txt
 : > "$rows"
 echo "scene method seed relmse_minus_noise iterations"
 for seed in ${SEEDS:-11}; do
     for name in ${SCENES:-tncg15_room glass_room cornell_box}; do
-        read -r ref noise <<< "$(scene_row "$name")"
+        read -r _ ref noise <<< "$(scene_row "$name")"
         for m in ${METHODS:-path vcm vcm-full sppm}; do
             o=$out/${name}_${backend}_${size}_${m}_$seed.exr
             "$hexray" render "scenes/$name.json" --backend "$backend" --method "$m" \
