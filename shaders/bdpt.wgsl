@@ -112,6 +112,15 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
             let albedo = material.color;
             let pdf_rev = abs(cos_o) * FRAC_1_PI;
+            // The merge radius here as a share of the iteration's (vcm: within the vertex's
+            // clearance, `merging::local_radius`; 1 otherwise), and merging's MIS constants for
+            // it: every strategy of a path through this vertex weighs the merge here with this
+            // radius (subpath.rs, "A radius of the vertex").
+            var share = 1.0;
+            if frame.merges_within_clearance != 0u {
+                share = local_radius(hit.p, hit.prim, frame.merge_radius) / frame.merge_radius;
+            }
+            let merge = merge_within(iteration_merge(), share);
 
             // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,
             // uniformly on its area, one shadow ray; weighted against BSDF sampling (s = 0)
@@ -125,7 +134,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             if own && connects() && depth < max_edges && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                 let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                 let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
-                let w = weight_next_event(m, iteration_merge(), bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
+                let w = weight_next_event(m, merge, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
                 let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                 radiance += value * visibility(hit.p, hit.p_err, hit.n, ls.p, ls.p_err, ls.n, value, u_bsdf.w);
             }
@@ -197,7 +206,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                 let w = weight_connection(
                     m,
                     light_mis,
-                    iteration_merge(),
+                    merge,
                     camera_bsdf.pdf * light_bsdf.cos_i / dist2,
                     camera_bsdf.pdf_rev,
                     light_bsdf.pdf * camera_bsdf.cos_i / dist2,
@@ -216,14 +225,18 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             // query at the hit and prefetches it during steps 4 and 5; here other invocations
             // hide its memory latency, and the query is the same.) VCM's query is rouletted by
             // the bound on what it can add: run with probability q, divided by q. Every wave of
-            // merging draws the same number, so a vertex merges with all waves or none.
+            // merging draws the same number, so a vertex merges with all waves or none. Within
+            // this vertex's radius share * r: the kernel's 1 / (pi r^2 N) and the light side's
+            // term (vc) scale with it.
             var q_merge = 1.0;
             if merges() && connects() {
-                q_merge = merge_survival(m, iteration_merge(), pdf_rev, max_element(throughput * albedo), frame.merge_rr_threshold);
+                q_merge = merge_survival(m, merge, pdf_rev, max_element(throughput * albedo), frame.merge_rr_threshold);
             }
             if merges() && (q_merge >= 1.0 || draw4(sampler, dim_merge(bounce)).x < q_merge) {
                 var gathered = vec3<f32>(0.0);
-                let camera_share = merge_camera_share(m, iteration_merge(), pdf_rev);
+                let camera_share = merge_camera_share(m, merge, pdf_rev);
+                let radius = share * frame.merge_radius;
+                let radius2 = select(grid_params.radius2, radius * radius, frame.merges_within_clearance != 0u);
                 let q = query_buckets(hit.p);
                 for (var j = 0u; j < q.n; j++) {
                     let b = q.b[j];
@@ -231,7 +244,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                     for (var e = atomicLoad(&grid_starts[b]); e < end; e++) {
                         let entry = grid_entries[e];
                         let d = entry.xyz - hit.p;
-                        if dot(d, d) >= grid_params.radius2 {
+                        if dot(d, d) >= radius2 {
                             continue;
                         }
                         let v = light_vertices[bitcast<u32>(entry.w)];
@@ -243,7 +256,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                         if connects() {
                             let light_mis = SubpathMis(v.d_vcm, v.d_vc, v.d_vm);
                             let cos_light = dot(v.n, v.wo);
-                            w = 1.0 / (merge_light_share(light_mis, iteration_merge(), cos_light * FRAC_1_PI) + 1.0 + camera_share);
+                            w = 1.0 / (merge_light_share(light_mis, merge, cos_light * FRAC_1_PI) + 1.0 + camera_share);
                         }
                         gathered += v.throughput * w;
                     }
@@ -251,7 +264,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                 if frame.merge_rr_undivided != 0u {
                     q_merge = 1.0;
                 }
-                radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization / q_merge);
+                radiance += throughput * albedo * gathered * (FRAC_1_PI * frame.merge_normalization / (share * share) / q_merge);
             }
             if !iteration_merge().camera_goes_on {
                 // SPPM and VCM end the camera subpath at its first diffuse vertex

@@ -177,7 +177,13 @@ fn trace_light_path(sampler: Sampler, path: u32) {
                     let g_camera = splat_importance(rv) * bsdf.cos_i / rv.dist2;
                     var w = 1.0;
                     if bidirectional {
-                        w = weight_to_camera(m, iteration_merge(), g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
+                        // A camera subpath's merge here would use this vertex's radius (vcm:
+                        // within its clearance).
+                        var merge = iteration_merge();
+                        if frame.merges_within_clearance != 0u {
+                            merge = merge_within(merge, local_radius(hit.p, hit.prim, frame.merge_radius) / frame.merge_radius);
+                        }
+                        w = weight_to_camera(m, merge, g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
                     }
                     let value = throughput * bsdf.f * (g_camera * w / n_paths);
                     splat(pixel, hit.p, hit.p_err, hit.n, value, draw4(sampler, dim_splat(bounce)).x);

@@ -131,6 +131,13 @@ struct Frame {
     // Whether the camera subpaths go on past their first diffuse vertex (`MergeMis`), 0 or 1:
     // 1 but for SPPM and vcm that merges.
     camera_goes_on: u32,
+    // The iteration's merge radius r_i (0 but for SPPM and VCM).
+    merge_radius: f32,
+    // Whether merges use each camera vertex's radius within its clearance (vcm, 1) or r_i
+    // everywhere (0), and the least share of r_i it leaves (`merging::CLEARANCE_FLOOR`).
+    merges_within_clearance: u32,
+    clearance_floor: f32,
+    pad0: u32,
     // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }

@@ -66,6 +66,12 @@ fn iteration_merge() -> MergeMis {
     return MergeMis(frame.merge_vm, frame.merge_vc, frame.camera_goes_on != 0u);
 }
 
+// The constants for a merge within share times the iteration's radius (`MergeMis::within`).
+fn merge_within(merge: MergeMis, share: f32) -> MergeMis {
+    let s = mis(share * share);
+    return MergeMis(merge.vm * s, merge.vc / s, merge.camera_goes_on);
+}
+
 // Whether this iteration merges photons (SPPM, VCM, at a radius above 0).
 fn merges() -> bool {
     return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL) && frame.merge_normalization > 0.0;

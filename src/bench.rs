@@ -185,7 +185,7 @@ pub fn make_backend<'a>(
             )?;
             renderer.set_light_samples(light_samples);
             if method.merges() {
-                let base = crate::merging::MergeRadius::default_for(flat);
+                let base = crate::merging::MergeRadius::default_for(flat, method);
                 renderer.set_merge_radius(crate::gpu::context::default_merge_radius(
                     &g.info, flat, base,
                 ));

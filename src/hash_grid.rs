@@ -236,14 +236,24 @@ impl HashGrid {
     /// The last step, naming each vertex within r by its slot in `entries` (the same vertices
     /// in the same order as [`HashGrid::finish_query`]), for arrays kept in entry order.
     #[inline]
-    pub fn finish_query_slots(&self, query: &PendingQuery, mut visit: impl FnMut(usize)) {
+    pub fn finish_query_slots(&self, query: &PendingQuery, visit: impl FnMut(usize)) {
+        self.finish_query_slots_within(query, self.params.radius2, visit)
+    }
+
+    #[inline]
+    pub fn finish_query_slots_within(
+        &self,
+        query: &PendingQuery,
+        radius2: f32,
+        mut visit: impl FnMut(usize),
+    ) {
         for &b in &query.buckets[..query.n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
             for (j, e) in self.entries[start as usize..end as usize]
                 .iter()
                 .enumerate()
             {
-                if (Vec3::new(e[0], e[1], e[2]) - query.p).length_squared() < self.params.radius2 {
+                if (Vec3::new(e[0], e[1], e[2]) - query.p).length_squared() < radius2 {
                     visit(start as usize + j);
                 }
             }

@@ -11,6 +11,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod camera;
 pub mod chart;
+pub mod clearance;
 pub mod compare;
 pub mod cpu;
 pub mod curve;

@@ -92,6 +92,14 @@ impl Method {
         matches!(self, Method::Sppm | Method::Vcm | Method::VcmFull)
     }
 
+    /// Whether the method merges within each camera vertex's clearance
+    /// (`merging::local_radius`): `vcm`, whose merges all happen at the first diffuse vertex of
+    /// a camera subpath, so that a radius that depends on that vertex enters every MIS weight
+    /// of a path alike (`subpath`, "A radius of the vertex").
+    pub fn merges_within_clearance(self) -> bool {
+        matches!(self, Method::Vcm)
+    }
+
     /// Whether the method connects camera vertices to light vertices and emitters (BDPT's
     /// strategies).
     pub fn connects(self) -> bool {

@@ -246,7 +246,7 @@ impl Backend for CpuBackend<'_> {
             check_film_for(method, film)?;
             let radius = self
                 .radius
-                .unwrap_or_else(|| crate::merging::MergeRadius::default_for(scene));
+                .unwrap_or_else(|| crate::merging::MergeRadius::default_for(scene, method));
             let buffers = self.buffers.get_or_insert_with(|| {
                 crate::cpu::LightPassBuffers::new(scene, camera, method, radius)
             });

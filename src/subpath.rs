@@ -46,6 +46,17 @@
 //! noisy (a one-sample final gather); ending there doubles the iterations in the same time
 //! (docs/performance.md, "VCM at the first diffuse vertex").
 //!
+//! A radius of the vertex (`vcm`): since vcm's camera subpaths end at their first diffuse vertex,
+//! a path has exactly one merging strategy, the merge at that vertex xd, and η enters no
+//! weight but through it: in next-event estimation and the connections at xd (the merge at the
+//! camera vertex, `merge.vm`), in the merge itself (vc), and in light tracing where d = 1 (the
+//! light vertex is xd). The light subpath's d_vc and d_vm, which carry η for merges at other
+//! vertices, are left out of every weight. So the radius may be any function of xd, and every
+//! strategy that makes a path weighs its merge with the same r(xd): vcm merges within xd's
+//! clearance (`merging::local_radius`), as a share of the iteration's radius r_i
+//! ([`MergeMis::within`]), and the weights stay a partition of unity. vcm-full, whose paths
+//! may merge at any of their diffuse vertices, keeps one radius.
+//!
 //! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
 //! emitters weigh alike in both methods), and where one strategy is much better than the others,
 //! which is the rule here (light tracing for caustics seen directly, camera paths for the room
@@ -280,6 +291,18 @@ impl MergeMis {
         vc: 0.0,
         camera_goes_on: true,
     };
+
+    /// The constants for a merge within `share` times the iteration's radius: η scales as the
+    /// disk's area, so vm by share^2β and vc by share^−2β (exactly these constants at 1).
+    #[inline]
+    pub fn within(&self, share: f32) -> MergeMis {
+        let s = mis(share * share);
+        MergeMis {
+            vm: self.vm * s,
+            vc: self.vc / s,
+            camera_goes_on: self.camera_goes_on,
+        }
+    }
 
     /// The constants of an iteration of `method` that merges within `radius` among
     /// `n_light_paths` light subpaths: with connections (VCM) or without (SPPM, whose merges are

@@ -22,7 +22,7 @@ fn cpu_against_gpu(
     gpu_faults: Faults,
 ) -> Option<Parity> {
     // Light tracing and BDPT do not merge: the radius is not used.
-    let radius = MergeRadius::default_for(&load(rel).1);
+    let radius = MergeRadius::default_for(&load(rel).1, method);
     gpu_against_cpu_iterations(rel, SIZE, iterations, method, radius, gpu_faults)
 }
 

@@ -121,6 +121,10 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merge_rr_undivided,
             planar_mirror_count,
             camera_goes_on,
+            merge_radius,
+            merges_within_clearance,
+            clearance_floor,
+            pad0,
             planar_mirrors
         }),
         rust_layout!(PlanarMirror {
@@ -211,6 +215,7 @@ macro_rules! rust_constants {
 
 /// The constants that the WGSL declares again, with their Rust values (each exact in f64).
 fn shared_constants() -> Vec<(&'static str, f64)> {
+    use hexray::clearance::{COPLANAR_COS, COPLANAR_OFFSET};
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
     use hexray::flat::{
         EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
@@ -242,6 +247,8 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         DIM_EMISSION_DIR,
         FRACTION_BITS,
         SCAN_BLOCK,
+        COPLANAR_COS,
+        COPLANAR_OFFSET,
     )
 }
 

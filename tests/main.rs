@@ -9,6 +9,7 @@ mod bench;
 mod bidirectional_furnace;
 mod bidirectional_parity;
 mod chi_square;
+mod clearance;
 mod cli;
 mod common;
 mod compare;

@@ -189,7 +189,7 @@ const GLASS_REFERENCE: &str = "tests/data/references/stability/glass_room_32.exr
 /// combined standard errors of the reference's: its bias has fallen below the noise.
 fn converges(scene: &str, reference: &str, method: Method, n: u32) {
     let (_, flat) = load(scene);
-    let radius = MergeRadius::default_for(&flat);
+    let radius = MergeRadius::default_for(&flat, method);
     let truth = reference::read(reference);
     let short = render_cpu_merging(scene, 32, 32, n, 11, method, radius, Faults::NONE);
     let long = render_cpu_merging(scene, 32, 32, 4 * n, 12, method, radius, Faults::NONE);
@@ -240,7 +240,7 @@ fn vcm_converges_on_glass_room() {
 #[test]
 fn the_convergence_check_rejects_a_ball_kernel() {
     let (_, flat) = load(CAUSTIC);
-    let radius = MergeRadius::default_for(&flat);
+    let radius = MergeRadius::default_for(&flat, Method::Vcm);
     let ball = Faults {
         merge_kernel_ball: true,
         ..Faults::NONE
@@ -259,7 +259,7 @@ fn the_convergence_check_rejects_a_ball_kernel() {
 /// sppm at 0.01 of the scene radius: one block at p = 1.5e-5, the same on lavapipe and an
 /// NVIDIA H200).
 fn gpu_parity(rel: &str, method: Method, gpu_faults: Faults) -> Option<Parity> {
-    let radius = MergeRadius::default_for(&load(rel).1);
+    let radius = MergeRadius::default_for(&load(rel).1, method);
     gpu_against_cpu_iterations(rel, 64, 48, method, radius, gpu_faults)
 }
 
@@ -336,7 +336,12 @@ const ROUNDING_TERM: f64 = 1e-8;
 /// on the GPU.
 fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<usize> {
     let (_, flat) = load(rel);
-    same_streams_at(rel, method, MergeRadius::default_for(&flat), gpu_faults)
+    same_streams_at(
+        rel,
+        method,
+        MergeRadius::default_for(&flat, method),
+        gpu_faults,
+    )
 }
 
 /// [`same_streams`] at merge radius `radius` (0: vcm is BDPT).
@@ -408,6 +413,20 @@ fn gpu_bdpt_equals_cpu_on_the_same_streams_through_planar_mirrors() {
     }
 }
 
+/// vcm merges within each camera vertex's clearance (`merging::local_radius`) on both
+/// backends, and the comparison sees it: a GPU that merges within the iteration's radius
+/// everywhere differs from the CPU in the pixels near the room's edges.
+#[test]
+fn the_same_streams_check_rejects_a_gpu_that_ignores_the_clearance() {
+    let everywhere = Faults {
+        merge_ignores_clearance: true,
+        ..Faults::NONE
+    };
+    if let Some(n) = same_streams("scenes/tncg15_room.json", Method::Vcm, everywhere) {
+        assert!(n > FLIPPED_PIXELS_ALLOWED, "only {n} pixels differ");
+    }
+}
+
 #[test]
 fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
     let ball = Faults {
@@ -429,7 +448,7 @@ fn gpu_renders_twice_bit_for_bit(method: Method, second_seed: u32) -> Option<boo
     let gpu = gpu()?;
     let rel = "scenes/tncg15_room.json";
     let (_, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat);
+    let radius = MergeRadius::default_for(&flat, method);
     let a = render_gpu_merging(gpu, rel, 64, 64, 8, 7, method, radius, Faults::NONE);
     let b = render_gpu_merging(
         gpu,
@@ -475,7 +494,7 @@ fn same_streams_in_waves(method: Method) -> Option<usize> {
     let gpu = gpu()?;
     let rel = "scenes/tncg15_room.json";
     let (scene, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat);
+    let radius = MergeRadius::default_for(&flat, method);
     let a = render_cpu_merging(rel, 64, 64, 8, 7, method, radius, Faults::NONE);
     let mut r = gpu_renderer(gpu, &scene, &flat, 64, 64, 7, method, Faults::NONE);
     r.set_merge_radius(radius);

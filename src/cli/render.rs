@@ -147,7 +147,7 @@ pub(crate) fn merge_radius_of(
             "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
         ));
     }
-    let mut r = hexray::merging::MergeRadius::default_for(flat);
+    let mut r = hexray::merging::MergeRadius::default_for(flat, method);
     if let Some(v) = radius {
         r.initial = v;
     }

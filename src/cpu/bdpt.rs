@@ -41,6 +41,7 @@ use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::merging::local_radius;
 use crate::packet::occluded_all;
 use crate::planar_mirror::{image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{
@@ -70,6 +71,10 @@ pub struct CameraPass<'a> {
     pub merge: MergeMis,
     /// The iteration's photons, for the merging methods.
     pub photons: Option<Photons<'a>>,
+    /// The iteration's merge radius.
+    pub radius: f32,
+    /// Whether merges at a vertex use its local radius (`merging::local_radius`).
+    pub local_radius: bool,
 }
 
 /// What merging needs: the iteration's photons as records in the hash grid's entry order, the
@@ -269,12 +274,22 @@ impl CameraPass<'_> {
                 // step 4, so that its memory reads overlap with steps 4 and 5
                 // (`HashGrid::begin_query`; the CPU alone: a GPU hides the latency with other
                 // invocations).
+                // The merge radius here as a share of the iteration's (vcm: within the
+                // vertex's clearance, `merging::local_radius`; 1 otherwise), and merging's MIS
+                // constants for it: every strategy of a path through this vertex weighs the
+                // merge here with this radius (`subpath`, "A radius of the vertex").
+                let share = if self.local_radius {
+                    local_radius(scene, hit.p, hit.prim, self.radius) / self.radius
+                } else {
+                    1.0
+                };
+                let merge = self.merge.within(share);
                 // Russian roulette on the query (VCM): run with probability q, divided by q.
                 let merging = self.photons.as_ref().and_then(|photons| {
                     let q = if self.connects {
                         merge_survival(
                             &mis,
-                            &self.merge,
+                            &merge,
                             pdf_rev,
                             (throughput * albedo).max_element(),
                             MERGE_RR_THRESHOLD,
@@ -299,14 +314,7 @@ impl CameraPass<'_> {
                 if connects && bsdf.pdf > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
                     let pdf_light = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
                     let pdf_emit = cos_l * FRAC_1_PI * bsdf.cos_i / dist2;
-                    let w = weight_next_event(
-                        &mis,
-                        &self.merge,
-                        bsdf.pdf,
-                        pdf_light,
-                        pdf_emit,
-                        pdf_rev,
-                    );
+                    let w = weight_next_event(&mis, &merge, bsdf.pdf, pdf_light, pdf_emit, pdf_rev);
                     let value = throughput * bsdf.f * ls.le * (bsdf.cos_i * w / pdf_light);
                     let light = (ls.p, ls.p_err, ls.n);
                     self.visibility(terms, here, light, value, u_bsdf[3], rays);
@@ -398,7 +406,7 @@ impl CameraPass<'_> {
                     let w = weight_connection(
                         &mis,
                         &light_mis,
-                        &self.merge,
+                        &merge,
                         camera_bsdf.pdf * light_bsdf.cos_i / dist2,
                         camera_bsdf.pdf_rev,
                         light_bsdf.pdf * camera_bsdf.cos_i / dist2,
@@ -418,27 +426,37 @@ impl CameraPass<'_> {
                 // same side of the surface, counted with the disk kernel 1 / (π r² N) times
                 // f α, weighted against every other strategy (SPPM: 1). The photon is taken
                 // as arrived here: Lambert's f = ρ/π, and the densities of its direction
-                // use its own normal's cosine, which stays positive across the disk.
+                // use its own normal's cosine, which stays positive across the disk. Within
+                // this vertex's radius share · r: the kernel's 1 / (π r² N) and the record's
+                // light-side term (∝ vc ∝ r^−2β) scale with it.
                 if let Some((photons, query, q)) = &merging {
                     let mut gathered = Vec3::ZERO;
-                    let camera_share = merge_camera_share(&mis, &self.merge, pdf_rev);
-                    photons.grid.finish_query_slots(query, |j| {
-                        let v = &photons.records[j];
-                        let n_light = Vec3::from(v.n);
-                        if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
-                            return;
-                        }
-                        // subpath::weight_merge, its two sides added as the shader adds them.
-                        let w = if self.connects {
-                            1.0 / (v.w_light + 1.0 + camera_share)
-                        } else {
-                            1.0
-                        };
-                        gathered += Vec3::from(v.throughput) * w;
-                    });
+                    let camera_share = merge_camera_share(&mis, &merge, pdf_rev);
+                    let area_share = share * share;
+                    let vc_share = crate::subpath::mis(area_share);
+                    let radius = share * self.radius;
+                    photons
+                        .grid
+                        .finish_query_slots_within(query, radius * radius, |j| {
+                            let v = &photons.records[j];
+                            let n_light = Vec3::from(v.n);
+                            if depth + v.length > max_edges || n_light.dot(n_facing) <= 0.0 {
+                                return;
+                            }
+                            // subpath::weight_merge, its two sides added as the shader adds them.
+                            let w = if self.connects {
+                                1.0 / (v.w_light / vc_share + 1.0 + camera_share)
+                            } else {
+                                1.0
+                            };
+                            gathered += Vec3::from(v.throughput) * w;
+                        });
                     let q = if faults.merge_rr_undivided { 1.0 } else { *q };
                     terms.add(
-                        throughput * albedo * gathered * (FRAC_1_PI * photons.normalization / q),
+                        throughput
+                            * albedo
+                            * gathered
+                            * (FRAC_1_PI * photons.normalization / area_share / q),
                         1.0,
                     );
                 }

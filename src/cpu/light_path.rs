@@ -29,6 +29,7 @@ use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
+use crate::merging::local_radius;
 use crate::packet::occluded_all;
 use crate::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
@@ -77,6 +78,10 @@ pub struct LightPass<'a> {
     pub merge: MergeMis,
     /// Whether this iteration merges (a radius above 0: SPPM, VCM).
     pub merges: bool,
+    /// The iteration's merge radius.
+    pub radius: f32,
+    /// Whether merges at a vertex use its local radius (`merging::local_radius`).
+    pub local_radius: bool,
 }
 
 /// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU
@@ -306,7 +311,14 @@ impl LightPass<'_> {
                             LightPassMode::LightTracing => 1.0,
                             _ => weight_to_camera(
                                 &mis,
-                                &self.merge,
+                                // A camera subpath's merge here would use this vertex's
+                                // radius (vcm: within its clearance).
+                                &if self.local_radius {
+                                    let r = local_radius(self.scene, hit.p, hit.prim, self.radius);
+                                    self.merge.within(r / self.radius)
+                                } else {
+                                    self.merge
+                                },
                                 g_camera * self.camera_subpaths[pixel] as f32,
                                 n_paths,
                                 bsdf.pdf_rev,

@@ -197,6 +197,10 @@ pub fn render_iterations(
             shadow_threshold: buffers.shadow_threshold,
             merge,
             merges: radius > 0.0,
+            radius,
+            local_radius: method.merges_within_clearance()
+                && radius > 0.0
+                && !faults.merge_ignores_clearance,
         };
         // The light pass: every light subpath, in chunks; the chunks' vertices are joined in
         // subpath order.
@@ -250,6 +254,10 @@ pub fn render_iterations(
             shadow_threshold: buffers.shadow_threshold,
             connects: method.connects(),
             merge,
+            radius,
+            local_radius: method.merges_within_clearance()
+                && radius > 0.0
+                && !faults.merge_ignores_clearance,
             photons: (radius > 0.0).then(|| {
                 debug_assert_eq!(buffers.records.len(), buffers.grid.entries.len());
                 bdpt::Photons {

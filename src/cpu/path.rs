@@ -71,6 +71,10 @@ pub struct Faults {
     /// light subpath's vertices from that diffuse vertex on): counted about twice (false when
     /// correct).
     pub mirror_light_twice: bool,
+    /// vcm: merges within the iteration's radius everywhere, also where another surface is
+    /// nearer than that (`merging::local_radius`): still consistent, but the room's edges come
+    /// out darker at a given radius (false when correct).
+    pub merge_ignores_clearance: bool,
 }
 
 impl Faults {
@@ -83,6 +87,7 @@ impl Faults {
         continue_at_vanishing_density: false,
         merge_rr_undivided: false,
         mirror_light_twice: false,
+        merge_ignores_clearance: false,
     };
 }
 

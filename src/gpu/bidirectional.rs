@@ -246,7 +246,7 @@ impl Bidirectional {
         };
         let specular_camera_subpaths = crate::subpath::specular_camera_subpaths(
             method,
-            MergeRadius::default_for(scene).initial,
+            MergeRadius::default_for(scene, method).initial,
         );
         let n_c = camera_radiance_lanes(&crate::subpath::camera_subpaths(
             &specular,
@@ -292,7 +292,7 @@ impl Bidirectional {
             scatter: pipeline("grid_scatter"),
             sort: pipeline("grid_sort"),
             query_check: pipeline("grid_query_check"),
-            radius: MergeRadius::default_for(scene),
+            radius: MergeRadius::default_for(scene, method),
             grid_min: crate::merging::scene_bounds(scene).0,
             ball_kernel,
         });
@@ -701,6 +701,9 @@ impl GpuRenderer {
                     merge_vc: merge.vc,
                     camera_goes_on: merge.camera_goes_on as u32,
                     merge_normalization: normalization,
+                    merge_radius: radius,
+                    merges_within_clearance: self.frame.merges_within_clearance
+                        & (radius > 0.0) as u32,
                     film_row: band_start,
                     film_rows: band_end - band_start,
                     band_pixels: band_pixels as u32,

@@ -18,7 +18,7 @@ use wgpu::util::DeviceExt;
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
 /// which tile, the method and its light pass, the film band, the test-only faults, and the
-/// scene's planar mirrors (`planar_mirror`). Twenty-three vec4s.
+/// scene's planar mirrors (`planar_mirror`). Twenty-four vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Frame {
@@ -77,6 +77,14 @@ pub struct Frame {
     /// `subpath::MergeMis::camera_goes_on` of the iteration as 0 or 1: whether the camera
     /// subpaths go on past their first diffuse vertex (1 but for SPPM and vcm that merges).
     pub camera_goes_on: u32,
+    /// The iteration's merge radius r_i (0 but for SPPM and VCM).
+    pub merge_radius: f32,
+    /// Whether merges use each camera vertex's radius within its clearance (vcm,
+    /// `Method::merges_within_clearance`) as 1, or r_i everywhere as 0, and the least share of
+    /// r_i it leaves (`merging::CLEARANCE_FLOOR`).
+    pub merges_within_clearance: u32,
+    pub clearance_floor: f32,
+    pub pad0: u32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
@@ -488,6 +496,13 @@ impl GpuRenderer {
             merge_rr_undivided: faults.merge_rr_undivided as u32,
             planar_mirror_count: scene.planar_mirrors.len() as u32,
             camera_goes_on: 1,
+            merge_radius: 0.0,
+            // Whether the method merges within the clearance; the iteration clears it where it
+            // does not merge (`Bidirectional`).
+            merges_within_clearance: (method.merges_within_clearance()
+                && !faults.merge_ignores_clearance) as u32,
+            clearance_floor: crate::merging::CLEARANCE_FLOOR,
+            pad0: 0,
             planar_mirrors: std::array::from_fn(|i| {
                 scene.planar_mirrors.get(i).copied().unwrap_or_default()
             }),

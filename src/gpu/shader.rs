@@ -21,10 +21,14 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 14] = [
+pub const BODY: [(&str, &str); 15] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
+    (
+        "clearance.wgsl",
+        include_str!("../../shaders/clearance.wgsl"),
+    ),
     ("bsdf.wgsl", include_str!("../../shaders/bsdf.wgsl")),
     ("light.wgsl", include_str!("../../shaders/light.wgsl")),
     (

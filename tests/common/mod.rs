@@ -185,7 +185,8 @@ fn render_cpu_flat(
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     if method.splats() {
-        let radius = radius.unwrap_or_else(|| hexray::merging::MergeRadius::default_for(flat));
+        let radius =
+            radius.unwrap_or_else(|| hexray::merging::MergeRadius::default_for(flat, method));
         let mut buffers = LightPassBuffers::new(flat, &camera, method, radius);
         render_iterations(
             flat,

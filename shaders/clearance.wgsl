@@ -1,0 +1,132 @@
+// The clearance of a surface point: how far the merge disk about it can reach before it meets
+// another surface (`src/clearance.rs`, the same steps).
+
+// Two triangles lie in one plane when their unit normals agree to within this ...
+const COPLANAR_COS: f32 = 1e-5;
+// ... and the other's vertices lie within this share of the scene's extent of the plane.
+const COPLANAR_OFFSET: f32 = 1e-5;
+
+// The distance from p, a point on primitive prim, to the nearest primitive not in the plane of
+// prim (a triangle) or other than prim (a sphere), or bound where none lies nearer.
+fn clearance(p: vec3<f32>, prim: u32, bound: f32) -> f32 {
+    let own_is_triangle = (prim & PRIM_SPHERE_BIT) == 0u;
+    var own = Triangle();
+    if own_is_triangle {
+        own = triangles[prim];
+    }
+    let ap = abs(p);
+    let tolerance = COPLANAR_OFFSET * max(max(max(ap.x, ap.y), ap.z) + bound, 1.0);
+    var best2 = bound * bound;
+    // Interior nodes still to visit: the traversal goes on into one child of a node and
+    // pushes the others (at most three per level, `bvh::stack_size`).
+    var stack: array<u32, STACK_SIZE>;
+    var sp = 0u;
+    var current = 0u;
+    loop {
+        let node = nodes[current];
+        var next = NO_NODE;
+        for (var c = 0u; c < 4u; c++) {
+            let count = node.count[c];
+            if count == EMPTY_SLOT {
+                continue;
+            }
+            // Squared distance from p to the child's box.
+            let lo = vec3<f32>(node.min_x[c], node.min_y[c], node.min_z[c]);
+            let hi = vec3<f32>(node.max_x[c], node.max_y[c], node.max_z[c]);
+            let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+            if dot(d, d) >= best2 {
+                continue;
+            }
+            if count == 0u {
+                if next != NO_NODE {
+                    stack[sp] = next;
+                    sp++;
+                }
+                next = node.child[c];
+                continue;
+            }
+            for (var k = node.child[c]; k < node.child[c] + count; k++) {
+                let other = prim_ref(k);
+                if other == PRIM_PADDING || other == prim {
+                    continue;
+                }
+                var d2 = 0.0;
+                if (other & PRIM_SPHERE_BIT) != 0u {
+                    let s = spheres[other & ~PRIM_SPHERE_BIT];
+                    let ds = length(p - s.center) - s.radius;
+                    d2 = ds * ds;
+                } else {
+                    let t = triangles[other];
+                    if own_is_triangle && coplanar(own, t, tolerance) {
+                        continue;
+                    }
+                    let q = closest_point_on_triangle(p, t) - p;
+                    d2 = dot(q, q);
+                }
+                best2 = min(best2, d2);
+            }
+        }
+        if next != NO_NODE {
+            current = next;
+        } else if sp > 0u {
+            sp--;
+            current = stack[sp];
+        } else {
+            break;
+        }
+    }
+    return sqrt(best2);
+}
+
+// Whether triangle t lies in the plane of own.
+fn coplanar(own: Triangle, t: Triangle, tolerance: f32) -> bool {
+    return abs(dot(own.n, t.n)) > 1.0 - COPLANAR_COS && abs(dot(own.n, t.v0 - own.v0)) <= tolerance && abs(dot(own.n, t.v1 - own.v0)) <= tolerance && abs(dot(own.n, t.v2 - own.v0)) <= tolerance;
+}
+
+// The point of triangle t nearest to p (Ericson, "Real-Time Collision Detection", 5.1.5: the
+// Voronoi region of a vertex, an edge or the face).
+fn closest_point_on_triangle(p: vec3<f32>, t: Triangle) -> vec3<f32> {
+    let a = t.v0;
+    let b = t.v1;
+    let c = t.v2;
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// The merge radius at a camera vertex p on primitive prim (`merging::local_radius`): its
+// clearance, at most radius and at least frame.clearance_floor of it.
+fn local_radius(p: vec3<f32>, prim: u32, radius: f32) -> f32 {
+    return max(clearance(p, prim, radius), frame.clearance_floor * radius);
+}
