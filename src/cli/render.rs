@@ -45,10 +45,11 @@ pub(crate) struct RenderArgs {
     /// time on the reference scenes, docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
-    /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units (default: 0.01 x the
-    /// scene's bounding-sphere radius, 0.003 x on a hardware GPU, whose renders run many more
-    /// iterations). Iteration i merges within r_1 i^((alpha-1)/2). vcm and vcm-full with 0 are
-    /// bdpt.
+    /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units (default: 0.03 x the
+    /// scene's bounding-sphere radius for vcm, 0.01 x for sppm and vcm-full, 0.003 x on a
+    /// hardware GPU, whose renders run many more iterations). Iteration i merges within
+    /// r_1 i^((alpha-1)/2); vcm merges within less where another surface is nearer to the
+    /// camera vertex (its clearance, at least 0.1 of that). vcm and vcm-full with 0 are bdpt.
     #[arg(long, value_parser = parse_radius)]
     pub(crate) radius: Option<f32>,
     /// Radius reduction alpha of sppm, vcm and vcm-full, in (0, 1] (default 0.75; 1 keeps the
