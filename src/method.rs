@@ -46,16 +46,15 @@ impl Method {
 
     /// Samples (iterations) when neither `--spp` nor `--time` is given, so that the default
     /// render (tncg15_room, 512x512) takes about as long as path tracing's 64 samples: 64 of
-    /// path tracing; 20 of vcm, whose camera subpaths end at their first diffuse vertex (on 2
-    /// cores of an Intel Xeon VM, 2026-11-27: 64 spp of path in 9.98 s, 21 iterations of vcm in
-    /// 10.09 s; `docs/methods.sh readme`); 8 of the other methods that trace a light subpath
-    /// and a camera subpath per pixel and iteration, which cost 3-9x a path-traced sample
-    /// (`hexray bench`; VCM's merges cost more as the image grows, since every pixel adds a
-    /// photon).
+    /// path tracing; 8 of the methods that trace a light subpath and a camera subpath per pixel
+    /// and iteration, which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost
+    /// more as the image grows, since every pixel adds a photon). vcm took 20 while its radius
+    /// was 0.01 of the scene's; within the clearance at 0.03 its merges gather nine times the
+    /// photons (on 2 cores of an Intel Xeon VM, 2026-11-27 evening: 64 spp of path in 6.28 s,
+    /// 20 iterations of vcm in 17.1 s, 7 in 6.3 s).
     pub fn default_samples(self) -> u32 {
         match self {
             Method::Path => 64,
-            Method::Vcm => 20,
             _ => 8,
         }
     }

@@ -61,7 +61,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
     pub(crate) light_samples: u32,
     /// Samples per pixel (iterations for all methods but path). Without --time the default is
-    /// 64 for path, 20 for vcm and 8 for the others (about as long at 512x512); with --time, no
+    /// 64 for path and 8 for the others (about as long at 512x512); with --time, no
     /// sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) spp: Option<u32>,
