@@ -3,7 +3,8 @@
 
 // Two triangles lie in one plane when their unit normals agree to within this ...
 const COPLANAR_COS: f32 = 1e-5;
-// ... and the other's vertices lie within this share of the scene's extent of the plane.
+// ... and the other's vertices lie off the plane by at most this share of the coordinates'
+// magnitude (the point's largest coordinate plus the bound, at least 1).
 const COPLANAR_OFFSET: f32 = 1e-5;
 
 // The distance from p, a point on primitive prim, to the nearest primitive not in the plane of

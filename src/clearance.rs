@@ -20,7 +20,8 @@ use glam::Vec3;
 /// above 1 − this) ...
 pub const COPLANAR_COS: f32 = 1e-5;
 
-/// ... and the other's vertices lie within this share of the scene's extent of the plane.
+/// ... and the other's vertices lie off the plane by at most this share of the coordinates'
+/// magnitude (the point's largest coordinate plus the bound, at least 1).
 pub const COPLANAR_OFFSET: f32 = 1e-5;
 
 /// The distance from `p`, a point on primitive `prim` (an id as `FlatScene::prims` holds it), to
