@@ -235,8 +235,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             if merges() && (q_merge >= 1.0 || draw4(sampler, dim_merge(bounce)).x < q_merge) {
                 var gathered = vec3<f32>(0.0);
                 let camera_share = merge_camera_share(m, merge, pdf_rev);
+                // As on the CPU: at share 1, (1 * r_i)^2 is the grid's own r_i^2 to the bit.
                 let radius = share * frame.merge_radius;
-                let radius2 = select(grid_params.radius2, radius * radius, frame.merges_within_clearance != 0u);
+                let radius2 = radius * radius;
                 let q = query_buckets(hit.p);
                 for (var j = 0u; j < q.n; j++) {
                     let b = q.b[j];
