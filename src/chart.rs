@@ -4,6 +4,7 @@
 use crate::curve::Point;
 use crate::output::{write_rgb8_png, write_text};
 use anyhow::{anyhow, Result};
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -22,6 +23,59 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(153, 153, 51),
     RGBColor(120, 120, 120),
 ];
+
+/// How a series is drawn: its colour names its method (the last word of its name: "path",
+/// "vcm", ...), its line and marker the renderer and backend before it ("hexray cpu", "hexray
+/// gpu", "mitsuba"), so that one method's curves share a colour across backends and renderers
+/// and no two of up to thirty series look alike.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Look {
+    /// Index into [`PALETTE`].
+    color: usize,
+    /// 0: a solid line with dots; 1: dashes with triangles; 2: short dashes with crosses.
+    style: usize,
+}
+
+/// The number of line styles of [`Look::style`].
+const STYLES: usize = 3;
+
+/// Each series' look, from the names in order: colours by the methods' order of first
+/// appearance, styles by the prefixes'. Where two series would still share a look (more than
+/// [`PALETTE`]'s methods, or names not of that form), the later one takes the next look that
+/// no series has yet.
+fn looks(names: &[&str]) -> Vec<Look> {
+    let (mut methods, mut groups) = (Vec::new(), Vec::new());
+    let mut taken: Vec<Look> = Vec::new();
+    for name in names {
+        let (group, method) = name.rsplit_once(' ').unwrap_or(("", name));
+        let index = |seen: &mut Vec<String>, key: &str| match seen.iter().position(|k| k == key) {
+            Some(i) => i,
+            None => {
+                seen.push(key.to_string());
+                seen.len() - 1
+            }
+        };
+        let (m, g) = (index(&mut methods, method), index(&mut groups, group));
+        let mut look = Look {
+            color: m % PALETTE.len(),
+            style: g % STYLES,
+        };
+        let all = PALETTE.len() * STYLES;
+        let mut k = look.style * PALETTE.len() + look.color;
+        for _ in 0..all {
+            if !taken.contains(&look) {
+                break;
+            }
+            k = (k + 1) % all;
+            look = Look {
+                color: k % PALETTE.len(),
+                style: k / PALETTE.len(),
+            };
+        }
+        taken.push(look);
+    }
+    taken
+}
 
 fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
@@ -148,18 +202,28 @@ fn draw<DB: DrawingBackend>(
         })
         .draw()
         .map_err(|e| anyhow!("{e:?}"))?;
-    for (i, (name, pts)) in series.iter().enumerate() {
-        let color = PALETTE[i % PALETTE.len()].to_rgba();
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
-            .map_err(|e| anyhow!("{e:?}"))?
-            .label(name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(|e| anyhow!("{e:?}"))?;
+    let names: Vec<&str> = series.iter().map(|(n, _)| n.as_str()).collect();
+    for ((name, pts), look) in series.iter().zip(looks(&names)) {
+        let color = PALETTE[look.color].to_rgba();
+        let line = color.stroke_width(2);
+        let pts = pts.iter().copied();
+        let drawn = match look.style {
+            0 => chart.draw_series(LineSeries::new(pts.clone(), line)),
+            1 => chart.draw_series(DashedLineSeries::new(pts.clone(), 10, 6, line)),
+            _ => chart.draw_series(DashedLineSeries::new(pts.clone(), 3, 4, line)),
+        }
+        .map_err(|e| anyhow!("{e:?}"))?;
+        let style = look.style;
+        drawn.label(name.clone()).legend(move |(x, y)| {
+            let (dash, gap) = [(20, 0), (10, 6), (3, 4)][style];
+            DashedPathElement::new(vec![(x, y), (x + 20, y)], dash, gap, line)
+        });
+        match look.style {
+            0 => chart.draw_series(pts.map(|p| Circle::new(p, 3, color.filled()))),
+            1 => chart.draw_series(pts.map(|p| TriangleMarker::new(p, 4, color.filled()))),
+            _ => chart.draw_series(pts.map(|p| Cross::new(p, 4, line))),
+        }
+        .map_err(|e| anyhow!("{e:?}"))?;
     }
     chart
         .configure_series_labels()
@@ -171,4 +235,44 @@ fn draw<DB: DrawingBackend>(
         .map_err(|e| anyhow!("{e:?}"))?;
     root.present().map_err(|e| anyhow!("{e:?}"))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fourteen series of docs/methods.md's charts: each method keeps its colour across
+    /// the backends and Mitsuba, each renderer-backend its line, and no two series look alike.
+    #[test]
+    fn each_method_has_one_colour_and_no_two_series_look_alike() {
+        let mut names = Vec::new();
+        for group in ["hexray cpu", "hexray gpu"] {
+            for method in ["path", "light", "bdpt", "sppm", "vcm", "vcm-full"] {
+                names.push(format!("{group} {method}"));
+            }
+        }
+        names.extend(["mitsuba path".to_string(), "mitsuba ptracer".to_string()]);
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let got = looks(&names);
+        for (i, a) in got.iter().enumerate() {
+            for (j, b) in got.iter().enumerate().skip(i + 1) {
+                assert_ne!(a, b, "{} and {} look alike", names[i], names[j]);
+            }
+        }
+        assert_eq!(got[0].color, got[6].color, "path on both backends");
+        assert_eq!(got[0].color, got[12].color, "path in both renderers");
+        assert_ne!(got[0].style, got[6].style);
+        assert_ne!(got[6].style, got[12].style);
+    }
+
+    /// Thirty series of one prefix, three times the palette's colours, all look different.
+    #[test]
+    fn series_beyond_the_palette_take_looks_not_yet_taken() {
+        let names: Vec<String> = (0..30).map(|i| format!("hexray m{i}")).collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let got = looks(&names);
+        for (i, a) in got.iter().enumerate() {
+            assert!(!got[..i].contains(a), "series {i} repeats a look");
+        }
+    }
 }
