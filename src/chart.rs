@@ -38,6 +38,8 @@ struct Look {
 
 /// The number of line styles of [`Look::style`].
 const STYLES: usize = 3;
+/// Each style's dash and gap in pixels (style 0's line is solid).
+const DASHES: [(u32, u32); STYLES] = [(20, 0), (10, 6), (3, 4)];
 
 /// Each series' look, from the names in order: colours by the methods' order of first
 /// appearance, styles by the prefixes'. Where two series would still share a look (more than
@@ -207,15 +209,13 @@ fn draw<DB: DrawingBackend>(
         let color = PALETTE[look.color].to_rgba();
         let line = color.stroke_width(2);
         let pts = pts.iter().copied();
+        let (dash, gap) = DASHES[look.style];
         let drawn = match look.style {
             0 => chart.draw_series(LineSeries::new(pts.clone(), line)),
-            1 => chart.draw_series(DashedLineSeries::new(pts.clone(), 10, 6, line)),
-            _ => chart.draw_series(DashedLineSeries::new(pts.clone(), 3, 4, line)),
+            _ => chart.draw_series(DashedLineSeries::new(pts.clone(), dash, gap, line)),
         }
         .map_err(|e| anyhow!("{e:?}"))?;
-        let style = look.style;
         drawn.label(name.clone()).legend(move |(x, y)| {
-            let (dash, gap) = [(20, 0), (10, 6), (3, 4)][style];
             DashedPathElement::new(vec![(x, y), (x + 20, y)], dash, gap, line)
         });
         match look.style {
