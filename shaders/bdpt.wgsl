@@ -112,14 +112,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
             let albedo = material.color;
             let pdf_rev = abs(cos_o) * FRAC_1_PI;
-            // The merge radius here as a share of the iteration's (vcm: within the vertex's
-            // clearance, `merging::local_radius`; 1 otherwise), and merging's MIS constants for
-            // it: every strategy of a path through this vertex weighs the merge here with this
-            // radius (subpath.rs, "A radius of the vertex").
-            var share = 1.0;
-            if frame.merges_within_clearance != 0u {
-                share = local_radius(hit.p, hit.prim, frame.merge_radius) / frame.merge_radius;
-            }
+            // The merge radius here as a share of the iteration's (`merge_share`: vcm within the
+            // vertex's clearance, 1 otherwise), and merging's MIS constants for it.
+            let share = merge_share(hit.p, hit.prim);
             let merge = merge_within(iteration_merge(), share);
 
             // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,

@@ -131,3 +131,14 @@ fn closest_point_on_triangle(p: vec3<f32>, t: Triangle) -> vec3<f32> {
 fn local_radius(p: vec3<f32>, prim: u32, radius: f32) -> f32 {
     return max(clearance(p, prim, radius), frame.clearance_floor * radius);
 }
+
+// The merge radius at a camera vertex p on primitive prim as a share of the iteration's
+// (`merging::merge_share`): local_radius / frame.merge_radius where the method merges within
+// the clearance, else 1. Every strategy of a path through the vertex weighs the merge there with
+// this radius (subpath.rs, "A radius of the vertex").
+fn merge_share(p: vec3<f32>, prim: u32) -> f32 {
+    if frame.merges_within_clearance == 0u {
+        return 1.0;
+    }
+    return local_radius(p, prim, frame.merge_radius) / frame.merge_radius;
+}

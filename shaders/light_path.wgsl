@@ -179,10 +179,7 @@ fn trace_light_path(sampler: Sampler, path: u32) {
                     if bidirectional {
                         // A camera subpath's merge here would use this vertex's radius (vcm:
                         // within its clearance).
-                        var merge = iteration_merge();
-                        if frame.merges_within_clearance != 0u {
-                            merge = merge_within(merge, local_radius(hit.p, hit.prim, frame.merge_radius) / frame.merge_radius);
-                        }
+                        let merge = merge_within(iteration_merge(), merge_share(hit.p, hit.prim));
                         w = weight_to_camera(m, merge, g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
                     }
                     let value = throughput * bsdf.f * (g_camera * w / n_paths);

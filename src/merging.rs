@@ -231,6 +231,24 @@ pub fn local_radius(scene: &FlatScene, p: glam::Vec3, prim: u32, radius: f32) ->
     crate::clearance::clearance(scene, p, prim, radius).max(CLEARANCE_FLOOR * radius)
 }
 
+/// The merge radius at camera vertex `p` on primitive `prim` as a share of the iteration's
+/// `radius`: [`local_radius`] / `radius` where the method merges `within_clearance`, else 1.
+/// Every strategy of a path through the vertex weighs the merge there with this radius
+/// (`MergeMis::within`; `crate::subpath`, "A radius of the vertex").
+pub fn merge_share(
+    scene: &FlatScene,
+    p: glam::Vec3,
+    prim: u32,
+    radius: f32,
+    within_clearance: bool,
+) -> f32 {
+    if within_clearance {
+        local_radius(scene, p, prim, radius) / radius
+    } else {
+        1.0
+    }
+}
+
 /// The merge kernel's normalisation for one iteration: the disk's 1 / (π r² N), shared by the
 /// N light subpaths; 0 at radius 0 (no merging). `ball_kernel` is the test-only fault
 /// `Faults::merge_kernel_ball`, the 3-D ball's 1 / (4/3 π r³ N).

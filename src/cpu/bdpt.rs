@@ -41,7 +41,7 @@ use crate::flat::{FlatScene, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::hash_grid::HashGrid;
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::merging::local_radius;
+use crate::merging::merge_share;
 use crate::packet::occluded_all;
 use crate::planar_mirror::{image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{
@@ -274,15 +274,9 @@ impl CameraPass<'_> {
                 // step 4, so that its memory reads overlap with steps 4 and 5
                 // (`HashGrid::begin_query`; the CPU alone: a GPU hides the latency with other
                 // invocations).
-                // The merge radius here as a share of the iteration's (vcm: within the
-                // vertex's clearance, `merging::local_radius`; 1 otherwise), and merging's MIS
-                // constants for it: every strategy of a path through this vertex weighs the
-                // merge here with this radius (`subpath`, "A radius of the vertex").
-                let share = if self.local_radius {
-                    local_radius(scene, hit.p, hit.prim, self.radius) / self.radius
-                } else {
-                    1.0
-                };
+                // The merge radius here as a share of the iteration's (`merge_share`: vcm within
+                // the vertex's clearance, 1 otherwise), and merging's MIS constants for it.
+                let share = merge_share(scene, hit.p, hit.prim, self.radius, self.local_radius);
                 let merge = self.merge.within(share);
                 // Russian roulette on the query (VCM): run with probability q, divided by q.
                 let merging = self.photons.as_ref().and_then(|photons| {

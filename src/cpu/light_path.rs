@@ -29,7 +29,7 @@ use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::sample_emission;
-use crate::merging::local_radius;
+use crate::merging::merge_share;
 use crate::packet::occluded_all;
 use crate::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
 use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
@@ -313,12 +313,13 @@ impl LightPass<'_> {
                                 &mis,
                                 // A camera subpath's merge here would use this vertex's
                                 // radius (vcm: within its clearance).
-                                &if self.local_radius {
-                                    let r = local_radius(self.scene, hit.p, hit.prim, self.radius);
-                                    self.merge.within(r / self.radius)
-                                } else {
-                                    self.merge
-                                },
+                                &self.merge.within(merge_share(
+                                    self.scene,
+                                    hit.p,
+                                    hit.prim,
+                                    self.radius,
+                                    self.local_radius,
+                                )),
                                 g_camera * self.camera_subpaths[pixel] as f32,
                                 n_paths,
                                 bsdf.pdf_rev,
