@@ -46,17 +46,17 @@ const DASHES: [(u32, u32); STYLES] = [(20, 0), (10, 6), (3, 4)];
 /// [`PALETTE`]'s methods, or names not of that form), the later one takes the next look that
 /// no series has yet.
 fn looks(names: &[&str]) -> Vec<Look> {
+    // The index of `key` among the keys seen so far, in order of first appearance.
+    fn index<'a>(seen: &mut Vec<&'a str>, key: &'a str) -> usize {
+        seen.iter().position(|&k| k == key).unwrap_or_else(|| {
+            seen.push(key);
+            seen.len() - 1
+        })
+    }
     let (mut methods, mut groups) = (Vec::new(), Vec::new());
     let mut taken: Vec<Look> = Vec::new();
     for name in names {
         let (group, method) = name.rsplit_once(' ').unwrap_or(("", name));
-        let index = |seen: &mut Vec<String>, key: &str| match seen.iter().position(|k| k == key) {
-            Some(i) => i,
-            None => {
-                seen.push(key.to_string());
-                seen.len() - 1
-            }
-        };
         let (m, g) = (index(&mut methods, method), index(&mut groups, group));
         let mut look = Look {
             color: m % PALETTE.len(),
