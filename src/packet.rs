@@ -284,7 +284,36 @@ mod avx {
         }
     }
 
-    /// `intersect_closest` for up to eight rays.
+    /// Every lane's nearest hit so far: its barycentrics and its primitive's id (`NO_PRIM`
+    /// while there is none), its t being the traversal's `t_limit`.
+    struct Nearest {
+        b1: __m256,
+        b2: __m256,
+        /// The ids' bits in float lanes, so that a blend moves them.
+        prim: __m256,
+    }
+
+    /// No primitive: a lane that has hit nothing yet.
+    const NO_PRIM: u32 = u32::MAX;
+
+    /// The vector mask of the lanes whose bits are set in `bits`.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn bits_to_mask(bits: i32) -> __m256 {
+        let m: [u32; 8] = std::array::from_fn(|l| if bits & (1 << l) != 0 { u32::MAX } else { 0 });
+        // SAFETY: eight u32 are eight f32's bits.
+        unsafe { _mm256_loadu_ps(m.as_ptr().cast()) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn prims(v: __m256) -> [u32; 8] {
+        lanes(v).map(f32::to_bits)
+    }
+
+    /// `intersect_closest` for up to eight rays. Each lane's nearest hit so far is kept in
+    /// vectors (`Nearest`, its t in `t_limit`) and replaced by a blend where a triangle is
+    /// nearer, so that a leaf's triangles take no branch on which lanes they won.
     ///
     /// # Safety
     /// The CPU must have AVX.
@@ -292,7 +321,14 @@ mod avx {
     pub unsafe fn closest(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
         let mut p = load(rays);
         let mut t_limit = _mm256_set1_ps(f32::MAX);
-        let mut best: [Option<Candidate>; 8] = [None; 8];
+        let mut best = Nearest {
+            b1: _mm256_setzero_ps(),
+            b2: _mm256_setzero_ps(),
+            prim: _mm256_set1_ps(f32::from_bits(NO_PRIM)),
+        };
+        // The packet's rays: the lanes past them never take a hit (closest-hit lanes stay
+        // active to the end).
+        let rays_mask = bits_to_mask(p.active);
         traverse(
             scene,
             &mut p,
@@ -308,73 +344,84 @@ mod avx {
                         tris &= tris - 1;
                         let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
                         let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        let nearer = _mm256_and_ps(
-                            _mm256_and_ps(h.hit, mask),
-                            _mm256_cmp_ps::<_CMP_LT_OS>(h.t, *t_limit),
-                        );
+                        let candidate = _mm256_and_ps(_mm256_and_ps(h.hit, mask), rays_mask);
+                        let mut won =
+                            _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_LT_OS>(h.t, *t_limit));
+                        let prim = scene.prims[k + tl];
                         // A hit at a lane's very t_limit replaces its nearest only if of a lower
                         // primitive id (`bvh::nearer`); rare, so taken lane by lane.
-                        let tie = _mm256_and_ps(
-                            _mm256_and_ps(h.hit, mask),
+                        let mut tied = _mm256_movemask_ps(_mm256_and_ps(
+                            candidate,
                             _mm256_cmp_ps::<_CMP_EQ_OQ>(h.t, *t_limit),
-                        );
-                        let prim = scene.prims[k + tl];
-                        let mut tied = _mm256_movemask_ps(tie) & entered;
-                        let mut won = _mm256_movemask_ps(nearer) & entered;
-                        while tied != 0 {
-                            let l = tied.trailing_zeros() as usize;
-                            tied &= tied - 1;
-                            if best[l].is_some_and(|b| prim < b.prim) {
-                                won |= 1 << l;
+                        )) & entered;
+                        if tied != 0 {
+                            let held = prims(best.prim);
+                            let mut tie_won = 0;
+                            while tied != 0 {
+                                let l = tied.trailing_zeros() as usize;
+                                tied &= tied - 1;
+                                if held[l] != NO_PRIM && prim < held[l] {
+                                    tie_won |= 1 << l;
+                                }
                             }
+                            won = _mm256_or_ps(won, bits_to_mask(tie_won));
                         }
-                        if won == 0 {
-                            continue;
-                        }
-                        *t_limit = _mm256_blendv_ps(*t_limit, h.t, nearer);
-                        let (t, b1, b2) = (lanes(h.t), lanes(h.b1), lanes(h.b2));
-                        while won != 0 {
-                            let l = won.trailing_zeros() as usize;
-                            won &= won - 1;
-                            best[l] = Some(Candidate {
-                                t: t[l],
-                                prim,
-                                b1: b1[l],
-                                b2: b2[l],
-                            });
-                        }
+                        *t_limit = _mm256_blendv_ps(*t_limit, h.t, won);
+                        best.b1 = _mm256_blendv_ps(best.b1, h.b1, won);
+                        best.b2 = _mm256_blendv_ps(best.b2, h.b2, won);
+                        best.prim =
+                            _mm256_blendv_ps(best.prim, _mm256_set1_ps(f32::from_bits(prim)), won);
                     }
                     let mut spheres = pack.spheres;
+                    if spheres == 0 {
+                        continue;
+                    }
+                    // Spheres lane by lane, on the nearest so far as arrays.
+                    let (mut limits, mut b1, mut b2, mut held) =
+                        (lanes(*t_limit), lanes(best.b1), lanes(best.b2), prims(best.prim));
                     while spheres != 0 {
                         let sl = spheres.trailing_zeros() as usize;
                         spheres &= spheres - 1;
                         let prim = scene.prims[k + sl];
                         let sphere = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
-                        let mut limits = lanes(*t_limit);
                         let mut todo = entered;
                         while todo != 0 {
                             let l = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
                             if let Some(h) = intersect_sphere(&rays[l], sphere) {
-                                if nearer(h.t, prim, limits[l], best[l]) {
-                                    limits[l] = h.t;
-                                    best[l] = Some(Candidate {
-                                        t: h.t,
-                                        prim,
-                                        b1: 0.0,
-                                        b2: 0.0,
-                                    });
+                                let so_far = (held[l] != NO_PRIM).then_some(Candidate {
+                                    t: limits[l],
+                                    prim: held[l],
+                                    b1: b1[l],
+                                    b2: b2[l],
+                                });
+                                if nearer(h.t, prim, limits[l], so_far) {
+                                    (limits[l], held[l], b1[l], b2[l]) = (h.t, prim, 0.0, 0.0);
                                 }
                             }
                         }
-                        // SAFETY: eight f32.
-                        *t_limit = unsafe { _mm256_loadu_ps(limits.as_ptr()) };
+                    }
+                    // SAFETY: eight f32 each.
+                    unsafe {
+                        *t_limit = _mm256_loadu_ps(limits.as_ptr());
+                        best.b1 = _mm256_loadu_ps(b1.as_ptr());
+                        best.b2 = _mm256_loadu_ps(b2.as_ptr());
+                        best.prim = _mm256_loadu_ps(held.as_ptr().cast());
                     }
                 }
             },
         );
+        let (t, b1, b2, held) = (lanes(t_limit), lanes(best.b1), lanes(best.b2), prims(best.prim));
         for (l, h) in hits.iter_mut().enumerate() {
-            *h = best[l].map(|c| surface_hit(scene, &rays[l], c));
+            *h = (held[l] != NO_PRIM).then(|| {
+                let c = Candidate {
+                    t: t[l],
+                    prim: held[l],
+                    b1: b1[l],
+                    b2: b2[l],
+                };
+                surface_hit(scene, &rays[l], c)
+            });
         }
     }
 
