@@ -11,17 +11,21 @@ struct LightSample {
 
 // The emitter-table row whose CDF interval holds u (first row with cdf > u).
 fn choose_emitter(u: f32) -> u32 {
-    var lo = 0u;
-    var hi = frame.num_emitters - 1u;
-    while lo < hi {
-        let mid = (lo + hi) / 2u;
-        if emitters[mid].cdf > u {
-            hi = mid;
-        } else {
-            lo = mid + 1u;
-        }
+    // The first of rows 0..rows - 1 with cdf > u, or rows - 1: `first_above` in src/light.rs,
+    // each halving a select (the answer lies in base..=base + size, every row before base has
+    // cdf <= u).
+    let candidates = frame.num_emitters - 1u;
+    if candidates == 0u {
+        return 0u;
     }
-    return lo;
+    var base = 0u;
+    var size = candidates;
+    while size > 1u {
+        let half = size / 2u;
+        base = select(base, base + half, emitters[base + half].cdf <= u);
+        size -= half;
+    }
+    return base + select(0u, 1u, emitters[base].cdf <= u);
 }
 
 // An emitter chosen in proportion to its power, then a point uniformly on its area: on a

@@ -377,8 +377,12 @@ mod avx {
                         continue;
                     }
                     // Spheres lane by lane, on the nearest so far as arrays.
-                    let (mut limits, mut b1, mut b2, mut held) =
-                        (lanes(*t_limit), lanes(best.b1), lanes(best.b2), prims(best.prim));
+                    let (mut limits, mut b1, mut b2, mut held) = (
+                        lanes(*t_limit),
+                        lanes(best.b1),
+                        lanes(best.b2),
+                        prims(best.prim),
+                    );
                     while spheres != 0 {
                         let sl = spheres.trailing_zeros() as usize;
                         spheres &= spheres - 1;
@@ -411,7 +415,12 @@ mod avx {
                 }
             },
         );
-        let (t, b1, b2, held) = (lanes(t_limit), lanes(best.b1), lanes(best.b2), prims(best.prim));
+        let (t, b1, b2, held) = (
+            lanes(t_limit),
+            lanes(best.b1),
+            lanes(best.b2),
+            prims(best.prim),
+        );
         for (l, h) in hits.iter_mut().enumerate() {
             *h = (held[l] != NO_PRIM).then(|| {
                 let c = Candidate {
