@@ -174,9 +174,13 @@ pub fn trace_pixels(
         // Step 2 - closest hit, for every path in flight.
         closest_rays.clear();
         closest_rays.extend(live.iter().map(|&p| flight[p].1.ray));
-        hits.clear();
-        hits.resize(live.len(), None);
-        intersect_closest_all(scene, &closest_rays, &mut hits);
+        // Every hit is written, so the buffer is only ever grown, never cleared.
+        if hits.len() < live.len() {
+            hits.resize(live.len(), None);
+        }
+        let hits = &mut hits[..live.len()];
+        intersect_closest_all(scene, &closest_rays, hits);
+        let hits = &*hits;
         *rays += live.len() as u64;
 
         // Steps 3 to 6 at each hit; the shadow rays of step 4 wait for one batch.
@@ -186,8 +190,10 @@ pub fn trace_pixels(
         // Diffuse hits with one shadow ray go eight at a time through the SIMD lanes of
         // `shade_diffuse_lanes`, which computes `shade_hit`'s numbers for each; the others
         // take `shade_hit` below, and the shadow rays are listed in path order.
-        shaded.clear();
-        shaded.resize(live.len(), None);
+        // All None between rounds: the loop below takes each result it finds.
+        if shaded.len() < live.len() {
+            shaded.resize(live.len(), None);
+        }
         diffuse.clear();
         if light_samples <= 1 {
             diffuse.extend(hits.iter().enumerate().filter_map(|(j, hit)| {
@@ -201,14 +207,14 @@ pub fn trace_pixels(
                 scene,
                 seed,
                 pixels,
-                (&live, &hits, batch),
+                (&live, hits, batch),
                 &mut flight,
                 faults,
                 &mut shaded,
             );
         }
-        for (j, (&p, hit)) in live.iter().zip(&hits).enumerate() {
-            let on = if let Some(Shaded { event, going_on }) = shaded[j] {
+        for (j, (&p, hit)) in live.iter().zip(hits).enumerate() {
+            let on = if let Some(Shaded { event, going_on }) = shaded[j].take() {
                 events.extend(event);
                 going_on
             } else {
@@ -231,9 +237,10 @@ pub fn trace_pixels(
         }
         shadow_rays.clear();
         shadow_rays.extend(events.iter().map(|e: &NextEvent| e.ray));
-        blocked.clear();
-        blocked.resize(events.len(), false);
-        occluded_all(scene, &shadow_rays, &mut blocked);
+        if blocked.len() < events.len() {
+            blocked.resize(events.len(), false);
+        }
+        occluded_all(scene, &shadow_rays, &mut blocked[..events.len()]);
         *rays += events.len() as u64;
 
         // Each path takes its unblocked shadow rays' light, in order; a path that ended adds
