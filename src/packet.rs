@@ -129,7 +129,7 @@ mod avx {
     /// vector mask.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn enters(p: &Packet, lo: [f32; 3], hi: [f32; 3], t_max: __m256) -> __m256 {
+    fn span(p: &Packet, lo: [f32; 3], hi: [f32; 3]) -> (__m256, __m256) {
         let mut near = [_mm256_setzero_ps(); 3];
         let mut far = [_mm256_setzero_ps(); 3];
         for a in 0..3 {
@@ -146,6 +146,13 @@ mod avx {
             _mm256_min_ps(_mm256_min_ps(far[0], far[1]), far[2]),
             _mm256_set1_ps(1.0 + 2.0 * gamma(3)),
         );
+        (t_near, t_far)
+    }
+
+    /// The lanes whose span starts no later than its end and `t_max`, as a vector mask.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn within((t_near, t_far): (__m256, __m256), t_max: __m256) -> __m256 {
         _mm256_cmp_ps::<_CMP_LE_OS>(t_near, _mm256_min_ps(t_far, t_max))
     }
 
@@ -259,13 +266,24 @@ mod avx {
         while top > 0 && p.active != 0 {
             top -= 1;
             let node = &scene.wide[stack[top] as usize];
-            for c in 0..crate::wide_bvh::WIDTH {
-                let count = node.count[c];
-                if count == EMPTY_SLOT {
-                    continue;
-                }
+            // Every slot's slab test first, without a branch on its outcome: the children that
+            // an active lane enters, as bits, and each one's entry and exit distances.
+            let mut spans = [(_mm256_setzero_ps(), _mm256_setzero_ps()); crate::wide_bvh::WIDTH];
+            let mut children = 0u32;
+            for (c, span_c) in spans.iter_mut().enumerate() {
                 let (lo, hi) = node.child_bounds(c);
-                let mask = enters(p, lo.to_array(), hi.to_array(), *t_limit);
+                *span_c = span(p, lo.to_array(), hi.to_array());
+                let entered = _mm256_movemask_ps(within(*span_c, *t_limit)) & p.active;
+                children |= u32::from((entered != 0) & (node.count[c] != EMPTY_SLOT)) << c;
+            }
+            // Then those children in slot order, each against the limit as it stands when its
+            // turn comes: a leaf before it may have lowered the limit, and a lower limit enters
+            // no child that the first test did not.
+            while children != 0 {
+                let c = children.trailing_zeros() as usize;
+                children &= children - 1;
+                let count = node.count[c];
+                let mask = within(spans[c], *t_limit);
                 let entered = _mm256_movemask_ps(mask) & p.active;
                 if entered == 0 {
                     continue;
