@@ -12,7 +12,7 @@
 //!
 //! Each lane's arithmetic is the scalar test's, operation for operation and with the same NaN
 //! behaviour of every comparison and min/max ([`crate::geometry::intersect_triangles4`],
-//! [`crate::geometry::intersect_boxes4`], [`intersect_sphere`] per lane), so a packet reports
+//! [`crate::geometry::intersect_boxes4`], [`crate::geometry::intersect_sphere`]), so a packet reports
 //! each ray's hits with the same t and barycentrics, and the same nearest: of hits at the same t,
 //! both keep the lower primitive id ([`crate::bvh::nearer`], which says where the order can
 //! still decide).
@@ -85,9 +85,9 @@ pub fn occluded_all(scene: &FlatScene, rays: &[Ray], blocked: &mut [bool]) {
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use crate::bvh::{nearer, surface_hit, Candidate, WIDE_STACK_SIZE};
-    use crate::flat::{FlatScene, EMPTY_SLOT, PRIM_SPHERE_BIT};
-    use crate::geometry::{gamma, intersect_sphere, safe_inverse, Ray, SurfaceHit};
+    use crate::bvh::{surface_hit, Candidate, WIDE_STACK_SIZE};
+    use crate::flat::{FlatScene, Sphere, EMPTY_SLOT, PRIM_SPHERE_BIT};
+    use crate::geometry::{gamma, safe_inverse, Ray, SurfaceHit};
     use std::arch::x86_64::*;
 
     /// Up to eight rays, a coordinate per vector, and what the traversal keeps per lane.
@@ -239,6 +239,61 @@ mod avx {
         }
     }
 
+    /// One sphere against every lane's ray: `intersect_sphere` with the same operations in the
+    /// same order, its two exits as masks (NaN-true or NaN-false as there), and of its roots
+    /// the one it returns, with its error bound.
+    struct SphereHits8 {
+        hit: __m256,
+        t: __m256,
+        t_err: __m256,
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn sphere(p: &Packet, sphere: &Sphere) -> SphereHits8 {
+        let s = |x: f32| _mm256_set1_ps(x);
+        let (mul, sub, add, div) = (_mm256_mul_ps, _mm256_sub_ps, _mm256_add_ps, _mm256_div_ps);
+        let abs = |x: __m256| _mm256_andnot_ps(s(-0.0), x);
+        let dot = |a: [__m256; 3], b: [__m256; 3]| {
+            add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]))
+        };
+        let r = s(sphere.radius);
+        let center = sphere.center.map(s);
+        let f = [0, 1, 2].map(|a| sub(p.o[a], center[a]));
+        let a = dot(p.d, p.d);
+        // -f . d, negated by its sign bit as Rust's unary minus
+        let b_half = _mm256_xor_ps(dot(f, p.d), s(-0.0));
+        let scale = div(b_half, a);
+        let l = [0, 1, 2].map(|k| add(f[k], mul(scale, p.d[k])));
+        let disc = mul(a, sub(mul(r, r), dot(l, l)));
+        let c = sub(dot(f, f), mul(r, r));
+        // signum(b_half) as copysign(1, b_half): the same but for a NaN b_half, where q is NaN
+        // either way
+        let sign = _mm256_or_ps(_mm256_and_ps(b_half, s(-0.0)), s(1.0));
+        let q = add(b_half, mul(sign, _mm256_sqrt_ps(disc)));
+        let (ta, tb) = (div(c, q), div(q, a));
+        let in_order = _mm256_cmp_ps::<_CMP_LE_OQ>(ta, tb);
+        let (t0, t1) = (
+            _mm256_blendv_ps(tb, ta, in_order),
+            _mm256_blendv_ps(ta, tb, in_order),
+        );
+        let c_err = div(add(dot(f, f), mul(r, r)), abs(q));
+        let err0 = mul(s(gamma(8)), add(abs(t0), c_err));
+        let err1 = mul(s(gamma(8)), add(abs(t1), c_err));
+        let first = _mm256_cmp_ps::<_CMP_GT_OQ>(t0, err0);
+        let second = _mm256_cmp_ps::<_CMP_GT_OQ>(t1, err1);
+        // `disc < 0` and `q == 0` return None; a NaN passes both, as there
+        let valid = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_NLT_UQ>(disc, s(0.0)),
+            _mm256_cmp_ps::<_CMP_NEQ_UQ>(q, s(0.0)),
+        );
+        SphereHits8 {
+            hit: _mm256_and_ps(valid, _mm256_or_ps(first, second)),
+            t: _mm256_blendv_ps(t1, t0, first),
+            t_err: _mm256_blendv_ps(err1, err0, first),
+        }
+    }
+
     #[inline]
     #[target_feature(enable = "avx")]
     fn lanes(v: __m256) -> [f32; 8] {
@@ -329,6 +384,40 @@ mod avx {
         lanes(v).map(f32::to_bits)
     }
 
+    /// Where a primitive's hits (`hit`, among the lanes `mask` that entered its leaf, `entered`
+    /// those of them active) are nearer than each lane's nearest so far, or as near and of a
+    /// lower id (`bvh::nearer`), they replace it: by a blend; ties, rare, lane by lane.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn keep_nearer(
+        best: &mut Nearest,
+        t_limit: &mut __m256,
+        (hit, mask, entered): (__m256, __m256, i32),
+        (t, b1, b2): (__m256, __m256, __m256),
+        prim: u32,
+    ) {
+        let candidate = _mm256_and_ps(hit, mask);
+        let mut won = _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_LT_OS>(t, *t_limit));
+        let tie = _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_EQ_OQ>(t, *t_limit));
+        let mut tied = _mm256_movemask_ps(tie) & entered;
+        if tied != 0 {
+            let held = prims(best.prim);
+            let mut tie_won = 0;
+            while tied != 0 {
+                let l = tied.trailing_zeros() as usize;
+                tied &= tied - 1;
+                if held[l] != NO_PRIM && prim < held[l] {
+                    tie_won |= 1 << l;
+                }
+            }
+            won = _mm256_or_ps(won, bits_to_mask(tie_won));
+        }
+        *t_limit = _mm256_blendv_ps(*t_limit, t, won);
+        best.b1 = _mm256_blendv_ps(best.b1, b1, won);
+        best.b2 = _mm256_blendv_ps(best.b2, b2, won);
+        best.prim = _mm256_blendv_ps(best.prim, _mm256_set1_ps(f32::from_bits(prim)), won);
+    }
+
     /// `intersect_closest` for up to eight rays. Each lane's nearest hit so far is kept in
     /// vectors (`Nearest`, its t in `t_limit`) and replaced by a blend where a triangle is
     /// nearer, so that a leaf's triangles take no branch on which lanes they won.
@@ -362,73 +451,31 @@ mod avx {
                         tris &= tris - 1;
                         let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
                         let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        let candidate = _mm256_and_ps(_mm256_and_ps(h.hit, mask), rays_mask);
-                        let mut won =
-                            _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_LT_OS>(h.t, *t_limit));
+                        let hit = _mm256_and_ps(h.hit, rays_mask);
                         let prim = scene.prims[k + tl];
-                        // A hit at a lane's very t_limit replaces its nearest only if of a lower
-                        // primitive id (`bvh::nearer`); rare, so taken lane by lane.
-                        let mut tied = _mm256_movemask_ps(_mm256_and_ps(
-                            candidate,
-                            _mm256_cmp_ps::<_CMP_EQ_OQ>(h.t, *t_limit),
-                        )) & entered;
-                        if tied != 0 {
-                            let held = prims(best.prim);
-                            let mut tie_won = 0;
-                            while tied != 0 {
-                                let l = tied.trailing_zeros() as usize;
-                                tied &= tied - 1;
-                                if held[l] != NO_PRIM && prim < held[l] {
-                                    tie_won |= 1 << l;
-                                }
-                            }
-                            won = _mm256_or_ps(won, bits_to_mask(tie_won));
-                        }
-                        *t_limit = _mm256_blendv_ps(*t_limit, h.t, won);
-                        best.b1 = _mm256_blendv_ps(best.b1, h.b1, won);
-                        best.b2 = _mm256_blendv_ps(best.b2, h.b2, won);
-                        best.prim =
-                            _mm256_blendv_ps(best.prim, _mm256_set1_ps(f32::from_bits(prim)), won);
+                        keep_nearer(
+                            &mut best,
+                            t_limit,
+                            (hit, mask, entered),
+                            (h.t, h.b1, h.b2),
+                            prim,
+                        );
                     }
                     let mut spheres = pack.spheres;
-                    if spheres == 0 {
-                        continue;
-                    }
-                    // Spheres lane by lane, on the nearest so far as arrays.
-                    let (mut limits, mut b1, mut b2, mut held) = (
-                        lanes(*t_limit),
-                        lanes(best.b1),
-                        lanes(best.b2),
-                        prims(best.prim),
-                    );
                     while spheres != 0 {
                         let sl = spheres.trailing_zeros() as usize;
                         spheres &= spheres - 1;
                         let prim = scene.prims[k + sl];
-                        let sphere = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
-                        let mut todo = entered;
-                        while todo != 0 {
-                            let l = todo.trailing_zeros() as usize;
-                            todo &= todo - 1;
-                            if let Some(h) = intersect_sphere(&rays[l], sphere) {
-                                let so_far = (held[l] != NO_PRIM).then_some(Candidate {
-                                    t: limits[l],
-                                    prim: held[l],
-                                    b1: b1[l],
-                                    b2: b2[l],
-                                });
-                                if nearer(h.t, prim, limits[l], so_far) {
-                                    (limits[l], held[l], b1[l], b2[l]) = (h.t, prim, 0.0, 0.0);
-                                }
-                            }
-                        }
-                    }
-                    // SAFETY: eight f32 each.
-                    unsafe {
-                        *t_limit = _mm256_loadu_ps(limits.as_ptr());
-                        best.b1 = _mm256_loadu_ps(b1.as_ptr());
-                        best.b2 = _mm256_loadu_ps(b2.as_ptr());
-                        best.prim = _mm256_loadu_ps(held.as_ptr().cast());
+                        let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
+                        let hit = _mm256_and_ps(h.hit, rays_mask);
+                        let zero = _mm256_setzero_ps();
+                        keep_nearer(
+                            &mut best,
+                            t_limit,
+                            (hit, mask, entered),
+                            (h.t, zero, zero),
+                            prim,
+                        );
                     }
                 }
             },
@@ -488,18 +535,14 @@ mod avx {
                         let sl = spheres.trailing_zeros() as usize;
                         spheres &= spheres - 1;
                         let prim = scene.prims[k + sl];
-                        let sphere = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
-                        let mut todo = entered & p.active;
-                        while todo != 0 {
-                            let l = todo.trailing_zeros() as usize;
-                            todo &= todo - 1;
-                            if let Some(h) = intersect_sphere(&rays[l], sphere) {
-                                if h.t < 1.0 - h.t_err {
-                                    hit |= 1 << l;
-                                    p.active &= !(1 << l);
-                                }
-                            }
-                        }
+                        let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
+                        let within = _mm256_and_ps(
+                            h.hit,
+                            _mm256_cmp_ps::<_CMP_LT_OS>(h.t, _mm256_sub_ps(*t_limit, h.t_err)),
+                        );
+                        let blocked = _mm256_movemask_ps(within) & entered & p.active;
+                        hit |= blocked;
+                        p.active &= !blocked;
                     }
                     if p.active == 0 {
                         return;
@@ -509,6 +552,93 @@ mod avx {
         );
         for (l, b) in blocked.iter_mut().enumerate() {
             *b = hit & (1 << l) != 0;
+        }
+    }
+
+    #[cfg(test)]
+    mod lane_tests {
+        use super::*;
+        use crate::geometry::intersect_sphere;
+        use glam::Vec3;
+
+        /// Each lane of `sphere` is `intersect_sphere`, bit for bit: the same hit or miss, t
+        /// and error bound, for rays from outside, inside and on the sphere, grazing ones, rays
+        /// along the axes (zero components), and NaN and infinite directions.
+        #[test]
+        fn each_lane_of_the_sphere_test_is_the_scalar_test() {
+            if !std::arch::is_x86_feature_detected!("avx") {
+                return;
+            }
+            let spheres = [
+                Sphere {
+                    center: [0.5, -1.0, 2.0],
+                    radius: 1.5,
+                    ..Default::default()
+                },
+                Sphere {
+                    center: [100.0, 3.0, -7.0],
+                    radius: 0.01,
+                    ..Default::default()
+                },
+                Sphere {
+                    center: [0.0; 3],
+                    radius: 1e4,
+                    ..Default::default()
+                },
+            ];
+            let mut rays = Vec::new();
+            for i in 0..4000u32 {
+                let u = |k: u32| {
+                    crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, k, 11, 12])[0])
+                };
+                let s = &spheres[(i % 3) as usize];
+                let c = Vec3::from(s.center);
+                let dir = Vec3::new(u(0) - 0.5, u(1) - 0.5, u(2) - 0.5);
+                let on = c + dir.normalize() * s.radius;
+                let o = match i % 5 {
+                    0 => on,
+                    1 => c + dir * s.radius,
+                    2 => c + dir * s.radius * 8.0,
+                    _ => c + Vec3::new(u(3) - 0.5, u(4) - 0.5, u(5) - 0.5) * s.radius * 4.0,
+                };
+                let mut d = match i % 7 {
+                    0 => c - o,
+                    1 => Vec3::new(u(6) - 0.5, 0.0, 0.0),
+                    2 => Vec3::new(0.0, 0.0, -1.0),
+                    3 => (c - o).cross(Vec3::new(u(7), u(8), 1.0)),
+                    _ => Vec3::new(u(6) - 0.5, u(7) - 0.5, u(8) - 0.5),
+                };
+                if i % 97 == 0 {
+                    d.y = f32::NAN;
+                }
+                if i % 89 == 0 {
+                    d.x = f32::INFINITY;
+                }
+                rays.push((i % 3, Ray { o, d }));
+            }
+            let mut checked = [0u32; 2];
+            for k in 0..3 {
+                let these: Vec<Ray> = rays.iter().filter(|r| r.0 == k).map(|r| r.1).collect();
+                for chunk in these.chunks(8) {
+                    // SAFETY: the CPU has AVX (checked above).
+                    let h = unsafe {
+                        let p = load(chunk);
+                        let h = sphere(&p, &spheres[k as usize]);
+                        (_mm256_movemask_ps(h.hit), lanes(h.t), lanes(h.t_err))
+                    };
+                    for (l, ray) in chunk.iter().enumerate() {
+                        let want = intersect_sphere(ray, &spheres[k as usize]);
+                        assert_eq!(h.0 & (1 << l) != 0, want.is_some(), "ray {ray:?}");
+                        if let Some(w) = want {
+                            assert_eq!(h.1[l].to_bits(), w.t.to_bits(), "t of {ray:?}");
+                            assert_eq!(h.2[l].to_bits(), w.t_err.to_bits(), "error of {ray:?}");
+                        }
+                        checked[usize::from(want.is_some())] += 1;
+                    }
+                }
+            }
+            // Both outcomes were met many times.
+            assert!(checked[0] > 500 && checked[1] > 500, "{checked:?}");
         }
     }
 }
