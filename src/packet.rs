@@ -499,6 +499,27 @@ mod avx {
         }
     }
 
+    /// A primitive's hits (`hit` at `t` with error bound `t_err`) that lie within the segment,
+    /// short of its end `t_limit` by their error bound, block those of the `entered` lanes still
+    /// active: they are marked in `blocked` and stop.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn stop_blocked(
+        p: &mut Packet,
+        blocked: &mut i32,
+        (hit, t, t_err): (__m256, __m256, __m256),
+        t_limit: __m256,
+        entered: i32,
+    ) {
+        let within = _mm256_and_ps(
+            hit,
+            _mm256_cmp_ps::<_CMP_LT_OS>(t, _mm256_sub_ps(t_limit, t_err)),
+        );
+        let now = _mm256_movemask_ps(within) & entered & p.active;
+        *blocked |= now;
+        p.active &= !now;
+    }
+
     /// `occluded(ray, 1)` for up to eight rays: a lane stops at its first hit within the
     /// segment, short of the far end by the hit's error bound.
     ///
@@ -522,13 +543,7 @@ mod avx {
                         tris &= tris - 1;
                         let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
                         let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        let within = _mm256_and_ps(
-                            h.hit,
-                            _mm256_cmp_ps::<_CMP_LT_OS>(h.t, _mm256_sub_ps(*t_limit, h.t_err)),
-                        );
-                        let blocked = _mm256_movemask_ps(within) & entered & p.active;
-                        hit |= blocked;
-                        p.active &= !blocked;
+                        stop_blocked(p, &mut hit, (h.hit, h.t, h.t_err), *t_limit, entered);
                     }
                     let mut spheres = pack.spheres;
                     while spheres != 0 && p.active != 0 {
@@ -536,13 +551,7 @@ mod avx {
                         spheres &= spheres - 1;
                         let prim = scene.prims[k + sl];
                         let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
-                        let within = _mm256_and_ps(
-                            h.hit,
-                            _mm256_cmp_ps::<_CMP_LT_OS>(h.t, _mm256_sub_ps(*t_limit, h.t_err)),
-                        );
-                        let blocked = _mm256_movemask_ps(within) & entered & p.active;
-                        hit |= blocked;
-                        p.active &= !blocked;
+                        stop_blocked(p, &mut hit, (h.hit, h.t, h.t_err), *t_limit, entered);
                     }
                     if p.active == 0 {
                         return;
