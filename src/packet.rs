@@ -12,10 +12,12 @@
 //!
 //! Each lane's arithmetic is the scalar test's, operation for operation and with the same NaN
 //! behaviour of every comparison and min/max ([`crate::geometry::intersect_triangles4`],
-//! [`crate::geometry::intersect_boxes4`], [`crate::geometry::intersect_sphere`]), so a packet reports
-//! each ray's hits with the same t and barycentrics, and the same nearest: of hits at the same t,
-//! both keep the lower primitive id ([`crate::bvh::nearer`], which says where the order can
-//! still decide).
+//! [`crate::geometry::intersect_boxes4`], [`crate::geometry::intersect_sphere`]), so a packet
+//! reports each ray's hits with the same t and barycentrics, and the same nearest: of hits at the
+//! same t, both keep the lower primitive id ([`crate::bvh::nearer`], which says where the order
+//! can still decide). Each lane's nearest so far lives in vectors and is replaced by blends, and
+//! a node's eight slab tests come before its children are visited, so that few branches depend
+//! on which lanes hit (docs/performance.md).
 //!
 //! Needs AVX (checked at run time, so the portable build uses it too); elsewhere each ray takes
 //! the scalar traversal.
@@ -125,8 +127,8 @@ mod avx {
     }
 
     /// The slab test of every lane's ray against one box (`intersect_boxes4`'s arithmetic, the
-    /// box broadcast instead of the ray): the lanes that enter it no later than `t_max`, as a
-    /// vector mask.
+    /// box broadcast instead of the ray): each lane's entry distance and its exit distance
+    /// widened by the test's error bound; [`within`] compares them with a limit.
     #[inline]
     #[target_feature(enable = "avx")]
     fn span(p: &Packet, lo: [f32; 3], hi: [f32; 3]) -> (__m256, __m256) {
