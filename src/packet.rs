@@ -158,6 +158,13 @@ mod avx {
         _mm256_cmp_ps::<_CMP_LE_OS>(t_near, _mm256_min_ps(t_far, t_max))
     }
 
+    /// |x| in every lane: the sign bit cleared, as `f32::abs`.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn abs(x: __m256) -> __m256 {
+        _mm256_andnot_ps(_mm256_set1_ps(-0.0), x)
+    }
+
     /// One triangle against every lane's ray: `intersect_triangle`'s Möller–Trumbore with the
     /// same operations in the same order (no fused multiply-adds), t, its error bound and the
     /// barycentrics, and the mask of the lanes that hit it.
@@ -174,7 +181,6 @@ mod avx {
     fn triangle(p: &Packet, v0: [f32; 3], e1: [f32; 3], e2: [f32; 3]) -> TriangleHits8 {
         let s = |x: f32| _mm256_set1_ps(x);
         let (mul, sub, add) = (_mm256_mul_ps, _mm256_sub_ps, _mm256_add_ps);
-        let abs = |x: __m256| _mm256_andnot_ps(_mm256_set1_ps(-0.0), x);
         let [ox, oy, oz] = p.o;
         let [dx, dy, dz] = p.d;
         let ([v0x, v0y, v0z], [e1x, e1y, e1z], [e2x, e2y, e2z]) = (v0.map(s), e1.map(s), e2.map(s));
@@ -255,7 +261,6 @@ mod avx {
     fn sphere(p: &Packet, sphere: &Sphere) -> SphereHits8 {
         let s = |x: f32| _mm256_set1_ps(x);
         let (mul, sub, add, div) = (_mm256_mul_ps, _mm256_sub_ps, _mm256_add_ps, _mm256_div_ps);
-        let abs = |x: __m256| _mm256_andnot_ps(s(-0.0), x);
         let dot = |a: [__m256; 3], b: [__m256; 3]| {
             add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]))
         };
@@ -386,22 +391,21 @@ mod avx {
         lanes(v).map(f32::to_bits)
     }
 
-    /// Where a primitive's hits (`hit`, among the lanes `mask` that entered its leaf, `entered`
-    /// those of them active) are nearer than each lane's nearest so far, or as near and of a
+    /// Where a primitive's hits (`candidate`: the lanes that hit it among the packet's rays
+    /// that entered its leaf) are nearer than each lane's nearest so far, or as near and of a
     /// lower id (`bvh::nearer`), they replace it: by a blend; ties, rare, lane by lane.
     #[inline]
     #[target_feature(enable = "avx")]
     fn keep_nearer(
         best: &mut Nearest,
         t_limit: &mut __m256,
-        (hit, mask, entered): (__m256, __m256, i32),
+        candidate: __m256,
         (t, b1, b2): (__m256, __m256, __m256),
         prim: u32,
     ) {
-        let candidate = _mm256_and_ps(hit, mask);
         let mut won = _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_LT_OS>(t, *t_limit));
         let tie = _mm256_and_ps(candidate, _mm256_cmp_ps::<_CMP_EQ_OQ>(t, *t_limit));
-        let mut tied = _mm256_movemask_ps(tie) & entered;
+        let mut tied = _mm256_movemask_ps(tie);
         if tied != 0 {
             let held = prims(best.prim);
             let mut tie_won = 0;
@@ -442,7 +446,9 @@ mod avx {
             scene,
             &mut p,
             &mut t_limit,
-            |p, t_limit, first, end, entered, mask| {
+            |p, t_limit, first, end, _, mask| {
+                // The packet's rays that entered this leaf.
+                let entering = _mm256_and_ps(mask, rays_mask);
                 // The leaf's entries start at a multiple of four (`flatten`): pack k / 4 holds
                 // entries k..k + 4, triangles first, then spheres.
                 for k in (first..end).step_by(4) {
@@ -453,15 +459,9 @@ mod avx {
                         tris &= tris - 1;
                         let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
                         let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        let hit = _mm256_and_ps(h.hit, rays_mask);
+                        let candidate = _mm256_and_ps(h.hit, entering);
                         let prim = scene.prims[k + tl];
-                        keep_nearer(
-                            &mut best,
-                            t_limit,
-                            (hit, mask, entered),
-                            (h.t, h.b1, h.b2),
-                            prim,
-                        );
+                        keep_nearer(&mut best, t_limit, candidate, (h.t, h.b1, h.b2), prim);
                     }
                     let mut spheres = pack.spheres;
                     while spheres != 0 {
@@ -469,15 +469,9 @@ mod avx {
                         spheres &= spheres - 1;
                         let prim = scene.prims[k + sl];
                         let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
-                        let hit = _mm256_and_ps(h.hit, rays_mask);
+                        let candidate = _mm256_and_ps(h.hit, entering);
                         let zero = _mm256_setzero_ps();
-                        keep_nearer(
-                            &mut best,
-                            t_limit,
-                            (hit, mask, entered),
-                            (h.t, zero, zero),
-                            prim,
-                        );
+                        keep_nearer(&mut best, t_limit, candidate, (h.t, zero, zero), prim);
                     }
                 }
             },
