@@ -76,6 +76,11 @@ fn clearance(p: vec3<f32>, prim: u32, bound: f32) -> f32 {
             break;
         }
     }
+    // Where nothing lies nearer, the bound itself: a GPU's square root, which WGSL lets be
+    // approximate, may round sqrt(bound²) off it.
+    if best2 >= bound * bound {
+        return bound;
+    }
     return sqrt(best2);
 }
 
@@ -140,5 +145,11 @@ fn merge_share(p: vec3<f32>, prim: u32) -> f32 {
     if frame.merges_within_clearance == 0u {
         return 1.0;
     }
-    return local_radius(p, prim, frame.merge_radius) / frame.merge_radius;
+    // Where the clearance reaches the radius the share is 1 exactly: WGSL's division need not
+    // give r / r = 1.
+    let local = local_radius(p, prim, frame.merge_radius);
+    if local >= frame.merge_radius {
+        return 1.0;
+    }
+    return local / frame.merge_radius;
 }

@@ -87,7 +87,13 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
             None => break,
         };
     }
-    best2.sqrt()
+    // Where nothing lies nearer, the bound itself: a GPU's square root, which WGSL lets be
+    // approximate, may round sqrt(bound²) off it (shaders/clearance.wgsl, the same step).
+    if best2 >= bound * bound {
+        bound
+    } else {
+        best2.sqrt()
+    }
 }
 
 /// Whether triangle `t` lies in the plane of `own`.

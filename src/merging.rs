@@ -242,10 +242,16 @@ pub fn merge_share(
     radius: f32,
     within_clearance: bool,
 ) -> f32 {
-    if within_clearance {
-        local_radius(scene, p, prim, radius) / radius
-    } else {
+    if !within_clearance {
+        return 1.0;
+    }
+    // Where the clearance reaches the radius the share is 1 exactly, on both backends: WGSL's
+    // division need not give r / r = 1 (shaders/clearance.wgsl, the same step).
+    let local = local_radius(scene, p, prim, radius);
+    if local >= radius {
         1.0
+    } else {
+        local / radius
     }
 }
 
