@@ -332,16 +332,18 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// | 0.01, glass_room | 13 | 18 | 20 |
 /// | 0.03, glass_room | 55 | | 37 (largest term 3.899e-3) |
 ///
-/// So these checks run every method at 0.01 ([`same_streams`]), the radius of the H100's and
-/// lavapipe's counts in the first table. At vcm's default of 0.03 the H100 flipped 49 pixels on tncg15_room and 55 on
+/// So these checks run every method at 0.01 ([`same_streams`]), the radius of the first
+/// table's counts. At vcm's default of 0.03 the H100 flipped 49 pixels on tncg15_room and 55 on
 /// glass_room (2026-11-28, docs/bench/2026-11-28_gpu/; on glass_room with the same largest term,
 /// 3.899e-3, as the CPU's fused hit point), beyond this allowance, with nothing wrong found in
 /// its clearance: the clearance moves only with the hit point, and it shrinks the disk, so vcm
-/// flips fewer pixels than vcm-full at the same radius.
+/// flips fewer pixels than vcm-full at the same radius. On lavapipe at 0.01 (2026-11-28): sppm
+/// 2, vcm 3 on tncg15_room and 3 on glass_room, vcm-full 3.
 ///
 /// A relMSE bound cannot tell the H100's flipped pixels from a planted error (four pixels'
-/// flips weigh 3.4e-4 over 4096 pixels in sppm); a count of differing pixels can: the planted
-/// ball kernel moves 19x the allowance. The count's blind spot is an error confined to 40 pixels
+/// flips weigh 3.4e-4 over 4096 pixels in sppm); a count of differing pixels can: on lavapipe
+/// at 0.01 the planted ball kernel moves 3627 pixels, 90x the allowance, and a GPU that ignores
+/// the clearance 416, 10x. The count's blind spot is an error confined to 40 pixels
 /// or fewer, however large; the statistical CPU = GPU tests above cover errors of that kind that
 /// move the image's mean. On both GPUs a second render of the same streams equals the first bit
 /// for bit (`gpu_merging_renders_the_same_streams_bit_for_bit`), so the flips are the
