@@ -619,10 +619,8 @@ fn take_bsdf_sample(
     if path.throughput.max_element() <= 0.0 {
         return false;
     }
-    path.ray = Ray {
-        o: origin(),
-        d: bs.wi,
-    };
+    path.ray.o = origin();
+    path.ray.d = bs.wi;
 
     // Step 6 - Russian roulette: from bounce RR_START_BOUNCE on, continue with probability
     // q = min(max(throughput) · eta_scale, 0.95) and divide by q, which keeps the estimator
