@@ -204,6 +204,11 @@ impl MergeRadius {
         } else {
             DEFAULT_RADIUS_FACTOR
         };
+        MergeRadius::of_scene(scene, factor)
+    }
+
+    /// r_1 at `factor` of `scene`'s bounding-sphere radius, α = [`DEFAULT_ALPHA`].
+    pub fn of_scene(scene: &FlatScene, factor: f32) -> MergeRadius {
         MergeRadius {
             initial: factor * scene_radius(scene),
             alpha: DEFAULT_ALPHA,
@@ -214,8 +219,8 @@ impl MergeRadius {
     /// radius ([`HARDWARE_GPU_RADIUS_FACTOR`]), α kept.
     pub fn for_hardware_gpu(self, scene: &FlatScene) -> MergeRadius {
         MergeRadius {
-            initial: HARDWARE_GPU_RADIUS_FACTOR * scene_radius(scene),
-            ..self
+            alpha: self.alpha,
+            ..MergeRadius::of_scene(scene, HARDWARE_GPU_RADIUS_FACTOR)
         }
     }
 }

@@ -165,6 +165,13 @@ mod avx {
         _mm256_andnot_ps(_mm256_set1_ps(-0.0), x)
     }
 
+    /// copysign(1, x) in every lane: 1 with x's sign bit.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn sign_one(x: __m256) -> __m256 {
+        _mm256_or_ps(_mm256_and_ps(x, _mm256_set1_ps(-0.0)), _mm256_set1_ps(1.0))
+    }
+
     /// One triangle against every lane's ray: `intersect_triangle`'s Möller–Trumbore with the
     /// same operations in the same order (no fused multiply-adds), t, its error bound and the
     /// barycentrics, and the mask of the lanes that hit it.
@@ -189,8 +196,7 @@ mod avx {
         let py = sub(mul(dz, e2x), mul(e2z, dx));
         let pz = sub(mul(dx, e2y), mul(e2x, dy));
         let det = add(add(mul(e1x, px), mul(e1y, py)), mul(e1z, pz));
-        // copysign(1, det)
-        let sign = _mm256_or_ps(_mm256_and_ps(det, s(-0.0)), s(1.0));
+        let sign = sign_one(det);
         let abs_det = abs(det);
         // s = o - v0, u = (s . pvec) sign
         let (sx, sy, sz) = (sub(ox, v0x), sub(oy, v0y), sub(oz, v0z));
@@ -276,7 +282,7 @@ mod avx {
         let c = sub(dot(f, f), mul(r, r));
         // signum(b_half) as copysign(1, b_half): the same but for a NaN b_half, where q is NaN
         // either way
-        let sign = _mm256_or_ps(_mm256_and_ps(b_half, s(-0.0)), s(1.0));
+        let sign = sign_one(b_half);
         let q = add(b_half, mul(sign, _mm256_sqrt_ps(disc)));
         let (ta, tb) = (div(c, q), div(q, a));
         let in_order = _mm256_cmp_ps::<_CMP_LE_OQ>(ta, tb);

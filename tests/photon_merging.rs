@@ -10,7 +10,7 @@ use glam::Vec3;
 use hexray::cpu::Faults;
 use hexray::film::Film;
 use hexray::hash_grid::{entry_index, HashGrid};
-use hexray::merging::{scene_radius, MergeRadius, DEFAULT_ALPHA, DEFAULT_RADIUS_FACTOR};
+use hexray::merging::{MergeRadius, DEFAULT_RADIUS_FACTOR};
 use hexray::method::Method;
 use hexray::sampling::Sampler;
 use hexray::stats::MeanImage;
@@ -360,10 +360,7 @@ const ROUNDING_TERM: f64 = 1e-8;
 /// three times that, and the flips grow with the radius (see there).
 fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<usize> {
     let (_, flat) = load(rel);
-    let radius = MergeRadius {
-        initial: DEFAULT_RADIUS_FACTOR * scene_radius(&flat),
-        alpha: DEFAULT_ALPHA,
-    };
+    let radius = MergeRadius::of_scene(&flat, DEFAULT_RADIUS_FACTOR);
     same_streams_at(rel, method, radius, gpu_faults)
 }
 
