@@ -338,7 +338,10 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// 3.899e-3, as the CPU's fused hit point), beyond this allowance, with nothing wrong found in
 /// its clearance: the clearance moves only with the hit point, and it shrinks the disk, so vcm
 /// flips fewer pixels than vcm-full at the same radius. On lavapipe at 0.01 (2026-11-28): sppm
-/// 2, vcm 3 on tncg15_room and 3 on glass_room, vcm-full 3.
+/// 2, vcm 3 on tncg15_room and 3 on glass_room, vcm-full 3. On an NVIDIA H200 (the same driver,
+/// 2026-11-28, docs/bench/2026-11-28_gpu/same_streams_counts.txt) at 0.01: sppm 23, vcm 21 and
+/// 23, vcm-full 16 (34 on glass_room, which no check runs), all within the allowance but not by
+/// much; at 0.03 vcm flipped 49 and 55 pixels, the H100's counts and largest term exactly.
 ///
 /// A relMSE bound cannot tell the H100's flipped pixels from a planted error (four pixels'
 /// flips weigh 3.4e-4 over 4096 pixels in sppm); a count of differing pixels can: on lavapipe
