@@ -177,6 +177,49 @@ impl V8 {
     pub fn dot(&self, o: &V8) -> F8 {
         (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
     }
+
+    /// glam's `Vec3::max_element`: max(max(x, y), z), each max `if a > b { a } else { b }`
+    /// (so a NaN compared loses to the other operand on the right, as there).
+    #[inline(always)]
+    pub fn max_element(&self) -> F8 {
+        let max = |a: F8, b: F8| a.simd_gt(b).select(a, b);
+        max(max(self.x, self.y), self.z)
+    }
+
+    /// `if_true` in the lanes of `mask`, `self` in the others.
+    #[inline(always)]
+    pub fn select_where(&self, mask: F8, if_true: &V8) -> V8 {
+        V8 {
+            x: mask.select(if_true.x, self.x),
+            y: mask.select(if_true.y, self.y),
+            z: mask.select(if_true.z, self.z),
+        }
+    }
+
+    /// Lane `l` as a vector.
+    #[inline(always)]
+    pub fn lane(&self, l: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array()[l],
+            self.y.as_array()[l],
+            self.z.as_array()[l],
+        )
+    }
+
+    /// Lane `l` set to `v`.
+    #[inline(always)]
+    pub fn set_lane(&mut self, l: usize, v: Vec3) {
+        self.x.as_mut_array()[l] = v.x;
+        self.y.as_mut_array()[l] = v.y;
+        self.z.as_mut_array()[l] = v.z;
+    }
+}
+
+/// The float mask (all bits set, or none) of the lanes whose bits are set in `bits`.
+#[inline(always)]
+pub fn mask(bits: u32) -> F8 {
+    let lane_bits = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+    bytemuck::cast((u32x8::splat(bits) & lane_bits).simd_eq(lane_bits))
 }
 
 /// [`crate::sampling::Sampler::draw4`] in lanes: block `dim` of the streams (`pixel`,

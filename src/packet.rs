@@ -25,6 +25,7 @@
 use crate::bvh::{intersect_closest, occluded};
 use crate::flat::FlatScene;
 use crate::geometry::{Ray, SurfaceHit};
+use crate::lanes::V8;
 
 /// The most rays a packet holds.
 pub const PACKET: usize = 8;
@@ -85,11 +86,52 @@ pub fn occluded_all(scene: &FlatScene, rays: &[Ray], blocked: &mut [bool]) {
     }
 }
 
+/// The nearest hit of each ray in `lanes` (bits) of eight rays given as rows (`o`, `d`: a
+/// coordinate of every lane per row, as a wavefront holds them in structure-of-arrays form),
+/// as [`intersect_closest`] finds it: one packet, without gathering the rays, where the tree is
+/// small ([`PACKET_CLOSEST_MAX_NODES`]) and the CPU has AVX, else lane by lane. A lane outside
+/// `lanes` gets None.
+pub fn intersect_closest_lanes(
+    scene: &FlatScene,
+    (o, d): (&V8, &V8),
+    lanes: u32,
+    hits: &mut [Option<SurfaceHit>; PACKET],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES && std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked above).
+        unsafe { avx::closest_lanes(scene, (o, d), lanes, hits) };
+        return;
+    }
+    let (o, d) = (o.lanes(), d.lanes());
+    for (l, h) in hits.iter_mut().enumerate() {
+        *h = (lanes & (1 << l) != 0)
+            .then(|| intersect_closest(scene, &Ray { o: o[l], d: d[l] }, f32::MAX))
+            .flatten();
+    }
+}
+
+/// Of eight shadow segments given as rows (`o + t d`, t in (0, 1)), those in `lanes` (bits)
+/// that something blocks, as bits, as [`occluded`] decides it: one packet where the CPU has
+/// AVX, else lane by lane.
+pub fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked above).
+        return unsafe { avx::occluded_lanes(scene, (o, d), lanes) };
+    }
+    let (o, d) = (o.lanes(), d.lanes());
+    (0..PACKET)
+        .filter(|&l| lanes & (1 << l) != 0 && occluded(scene, &Ray { o: o[l], d: d[l] }, 1.0))
+        .fold(0, |bits, l| bits | 1 << l)
+}
+
 #[cfg(target_arch = "x86_64")]
 mod avx {
     use crate::bvh::{surface_hit, Candidate, WIDE_STACK_SIZE};
     use crate::flat::{FlatScene, Sphere, EMPTY_SLOT, PRIM_SPHERE_BIT};
-    use crate::geometry::{gamma, safe_inverse, Ray, SurfaceHit};
+    use crate::geometry::{gamma, Ray, SurfaceHit};
+    use crate::lanes::V8;
     use std::arch::x86_64::*;
 
     /// Up to eight rays, a coordinate per vector, and what the traversal keeps per lane.
@@ -105,24 +147,50 @@ mod avx {
     #[inline]
     #[target_feature(enable = "avx")]
     fn load(rays: &[Ray]) -> Packet {
-        let mut c = [[0.0f32; 8]; 9];
+        let mut c = [[0.0f32; 8]; 6];
         for l in 0..8 {
             // Lanes past the rays repeat the last ray and stay inactive.
             let r = &rays[l.min(rays.len() - 1)];
-            let inv = safe_inverse(r.d);
             for a in 0..3 {
                 c[a][l] = r.o[a];
                 c[3 + a][l] = r.d[a];
-                c[6 + a][l] = inv[a];
             }
         }
         // SAFETY: each array holds eight f32.
         let v = c.map(|a| unsafe { _mm256_loadu_ps(a.as_ptr()) });
+        from_rows(
+            [v[0], v[1], v[2]],
+            [v[3], v[4], v[5]],
+            (1 << rays.len()) - 1,
+        )
+    }
+
+    /// A coordinate row of eight lanes as a vector.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn row(x: &crate::lanes::F8) -> __m256 {
+        let a: [f32; 8] = bytemuck::cast(*x);
+        // SAFETY: eight f32.
+        unsafe { _mm256_loadu_ps(a.as_ptr()) }
+    }
+
+    /// The packet of rays `o + t d` in rows, the lanes `active` (bits) looking: each lane's
+    /// inverse direction is `safe_inverse`'s, operation for operation (a component below 1e-30
+    /// in magnitude replaced by 1e-30 of its sign, then 1 / d).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn from_rows(o: [__m256; 3], d: [__m256; 3], active: i32) -> Packet {
+        let tiny = _mm256_set1_ps(1e-30);
+        let inv_d = d.map(|x| {
+            let is_tiny = _mm256_cmp_ps::<_CMP_LT_OS>(abs(x), tiny);
+            let signed = _mm256_or_ps(_mm256_and_ps(x, _mm256_set1_ps(-0.0)), tiny);
+            _mm256_div_ps(_mm256_set1_ps(1.0), _mm256_blendv_ps(x, signed, is_tiny))
+        });
         Packet {
-            o: [v[0], v[1], v[2]],
-            d: [v[3], v[4], v[5]],
-            inv_d: [v[6], v[7], v[8]],
-            active: (1 << rays.len()) - 1,
+            o,
+            d,
+            inv_d,
+            active,
         }
     }
 
@@ -438,7 +506,66 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn closest(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
-        let mut p = load(rays);
+        let (t, b1, b2, held) = closest_packet(scene, load(rays));
+        for (l, h) in hits.iter_mut().enumerate() {
+            *h = (held[l] != NO_PRIM).then(|| {
+                let c = Candidate {
+                    t: t[l],
+                    prim: held[l],
+                    b1: b1[l],
+                    b2: b2[l],
+                };
+                surface_hit(scene, &rays[l], c)
+            });
+        }
+    }
+
+    /// [`closest`] for the lanes `lanes` of eight rays in rows.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn closest_lanes(
+        scene: &FlatScene,
+        (o, d): (&V8, &V8),
+        lanes: u32,
+        hits: &mut [Option<SurfaceHit>; 8],
+    ) {
+        let p = from_rows(
+            [row(&o.x), row(&o.y), row(&o.z)],
+            [row(&d.x), row(&d.y), row(&d.z)],
+            lanes as i32,
+        );
+        let (t, b1, b2, held) = closest_packet(scene, p);
+        let (oa, da) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+        for (l, h) in hits.iter_mut().enumerate() {
+            *h = (held[l] != NO_PRIM).then(|| {
+                let c = Candidate {
+                    t: t[l],
+                    prim: held[l],
+                    b1: b1[l],
+                    b2: b2[l],
+                };
+                let lane = |v: &[crate::lanes::F8; 3]| {
+                    glam::Vec3::new(v[0].as_array()[l], v[1].as_array()[l], v[2].as_array()[l])
+                };
+                let ray = Ray {
+                    o: lane(&oa),
+                    d: lane(&da),
+                };
+                surface_hit(scene, &ray, c)
+            });
+        }
+    }
+
+    /// The traversal of [`closest`]: each lane's nearest t, barycentrics and primitive
+    /// (`NO_PRIM` where none).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn closest_packet(
+        scene: &FlatScene,
+        mut p: Packet,
+    ) -> ([f32; 8], [f32; 8], [f32; 8], [u32; 8]) {
         let mut t_limit = _mm256_set1_ps(f32::MAX);
         let mut best = Nearest {
             b1: _mm256_setzero_ps(),
@@ -482,23 +609,12 @@ mod avx {
                 }
             },
         );
-        let (t, b1, b2, held) = (
+        (
             lanes(t_limit),
             lanes(best.b1),
             lanes(best.b2),
             prims(best.prim),
-        );
-        for (l, h) in hits.iter_mut().enumerate() {
-            *h = (held[l] != NO_PRIM).then(|| {
-                let c = Candidate {
-                    t: t[l],
-                    prim: held[l],
-                    b1: b1[l],
-                    b2: b2[l],
-                };
-                surface_hit(scene, &rays[l], c)
-            });
-        }
+        )
     }
 
     /// A primitive's hits (`hit` at `t` with error bound `t_err`) that lie within the segment,
@@ -529,7 +645,30 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn occluded(scene: &FlatScene, rays: &[Ray], blocked: &mut [bool]) {
-        let mut p = load(rays);
+        let hit = occluded_packet(scene, load(rays));
+        for (l, b) in blocked.iter_mut().enumerate() {
+            *b = hit & (1 << l) != 0;
+        }
+    }
+
+    /// [`occluded`] for the lanes `lanes` of eight segments in rows: the blocked lanes' bits.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 {
+        let p = from_rows(
+            [row(&o.x), row(&o.y), row(&o.z)],
+            [row(&d.x), row(&d.y), row(&d.z)],
+            lanes as i32,
+        );
+        occluded_packet(scene, p) as u32
+    }
+
+    /// The traversal of [`occluded`]: the blocked lanes' bits.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn occluded_packet(scene: &FlatScene, mut p: Packet) -> i32 {
         let mut t_limit = _mm256_set1_ps(1.0);
         let mut hit = 0i32;
         traverse(
@@ -561,9 +700,7 @@ mod avx {
                 }
             },
         );
-        for (l, b) in blocked.iter_mut().enumerate() {
-            *b = hit & (1 << l) != 0;
-        }
+        hit
     }
 
     #[cfg(test)]

@@ -24,7 +24,7 @@ use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
 use crate::lanes::{self, F8, LANES, U8, V8};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, LightSample};
-use crate::packet::{intersect_closest_all, occluded_all};
+use crate::packet::{intersect_closest_lanes, occluded_all, occluded_lanes};
 use crate::sampling::{
     dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA, MAX_LIGHT_SAMPLES,
 };
@@ -123,16 +123,17 @@ pub fn trace_path(
 }
 
 /// The samples `first..first + count` of each pixel `(index, x, y)` of `pixels`, added in
-/// sample order to its `stats`: [`trace_path`] for every sample, run as a wavefront. Every
-/// pixel has one path in flight; each round traces all their closest-hit rays, eight to a
-/// packet where the tree is small ([`intersect_closest_all`]), shades each hit (steps 3 to 6;
-/// diffuse hits eight at a time in SIMD lanes, the rest one by one),
-/// traces all the shadow rays of next-event estimation in packets ([`occluded_all`]) and adds
-/// what they let through; a path that ended hands its pixel to the pixel's next sample (path
-/// regeneration, as the shader's `render`). Each sample is the same path as `trace_path`'s,
-/// with the same arithmetic in the same order, so the image is the same bit for bit (a test
-/// below). With packets the path tracer runs 1.11 – 1.22x as fast on the reference scenes
-/// (docs/performance.md).
+/// sample order to its `stats`: [`trace_path`] for every sample, run as a wavefront of eight
+/// paths in the SIMD lanes of a [`Slot`], whose state is kept as rows of eight values
+/// (structure of arrays, as Mitsuba's wavefronts keep theirs). Each round traces the eight
+/// closest-hit rays as one packet straight from the rows ([`intersect_closest_lanes`]), shades
+/// the diffuse hits in lanes (steps 3 to 6, [`shade_diffuse_lanes`]) and the others one by one
+/// ([`shade_hit`]), traces the diffuse hits' shadow rays as one packet ([`occluded_lanes`]) and
+/// adds what they let through. A lane whose path ended adds its sample to its pixel and starts
+/// the pixel's next sample, or the next pixel's first, in place (path regeneration, as the
+/// shader's `render`), so that nothing is gathered or moved between rounds. Each sample is the
+/// same path as `trace_path`'s, with the same arithmetic in the same order, so the image is the
+/// same bit for bit (a test below).
 #[allow(clippy::too_many_arguments)]
 pub fn trace_pixels(
     scene: &FlatScene,
@@ -151,218 +152,233 @@ pub fn trace_pixels(
         return;
     }
     let end = first + count;
-    // Per pixel, its sample in flight and that sample's path.
-    let mut flight: Vec<(u32, PathState)> = pixels
-        .iter()
-        .map(|&(index, x, y)| {
-            let sampler = Sampler::new(seed, index, first);
-            (first, start_path(camera, x, y, &sampler))
-        })
-        .collect();
-    // The pixels whose path is in flight, and the round's buffers.
-    let mut live: Vec<usize> = (0..pixels.len()).collect();
-    let mut closest_rays = Vec::with_capacity(pixels.len());
-    let mut hits = Vec::with_capacity(pixels.len());
-    let mut events = Vec::new();
-    let mut event_ends = Vec::with_capacity(pixels.len());
-    let mut going_on = Vec::with_capacity(pixels.len());
-    let mut shaded: Vec<Option<Shaded>> = Vec::with_capacity(pixels.len());
-    let mut diffuse = Vec::with_capacity(pixels.len());
-    let mut shadow_rays = Vec::new();
-    let mut blocked = Vec::new();
-    while !live.is_empty() {
-        // Step 2 - closest hit, for every path in flight.
-        closest_rays.clear();
-        closest_rays.extend(live.iter().map(|&p| flight[p].1.ray));
-        // Every hit is written, so the buffer is only ever grown, never cleared.
-        if hits.len() < live.len() {
-            hits.resize(live.len(), None);
-        }
-        let hits = &mut hits[..live.len()];
-        intersect_closest_all(scene, &closest_rays, hits);
-        let hits = &*hits;
-        *rays += live.len() as u64;
+    let start = |slot: &mut Slot, l: usize, p: usize, sample: u32| {
+        let (index, x, y) = pixels[p];
+        let path = start_path(camera, x, y, &Sampler::new(seed, index, sample));
+        slot.set_path(l, &path);
+        slot.pixel[l] = p;
+        slot.stream.as_mut_array()[l] = index;
+        slot.sample.as_mut_array()[l] = sample;
+        slot.live |= 1 << l;
+    };
+    let mut slot = Slot::default();
+    // The next of the tile's pixels no lane has taken yet.
+    let mut next = 0;
+    for l in 0..LANES.min(pixels.len()) {
+        start(&mut slot, l, next, first);
+        next += 1;
+    }
+    let mut hits = [None; LANES];
+    // The shadow rays of the hits shaded one by one, each with its lane.
+    let (mut events, mut event_lanes, mut shadow_rays, mut blocked) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    while slot.live != 0 {
+        // Step 2 - closest hit, the eight rays as one packet.
+        intersect_closest_lanes(scene, (&slot.o, &slot.d), slot.live, &mut hits);
+        *rays += u64::from(slot.live.count_ones());
 
-        // Steps 3 to 6 at each hit; the shadow rays of step 4 wait for one batch.
+        // Steps 3 to 6 at each hit: diffuse hits with one shadow ray in lanes, the others one
+        // by one; the shadow rays of step 4 wait to be traced together.
+        let (mut diffuse, mut ended) = (0u32, 0u32);
         events.clear();
-        event_ends.clear();
-        going_on.clear();
-        // Diffuse hits with one shadow ray go eight at a time through the SIMD lanes of
-        // `shade_diffuse_lanes`, which computes `shade_hit`'s numbers for each; the others
-        // take `shade_hit` below, and the shadow rays are listed in path order.
-        // All None between rounds: the loop below takes each result it finds.
-        if shaded.len() < live.len() {
-            shaded.resize(live.len(), None);
-        }
-        diffuse.clear();
-        if light_samples <= 1 {
-            diffuse.extend(hits.iter().enumerate().filter_map(|(j, hit)| {
-                hit.as_ref()
-                    .filter(|hit| scene.materials[hit.material as usize].kind == KIND_DIFFUSE)
-                    .map(|_| j)
-            }));
-        }
-        for batch in diffuse.chunks(LANES) {
-            shade_batch(
-                scene,
-                seed,
-                pixels,
-                (&live, hits, batch),
-                &mut flight,
-                faults,
-                &mut shaded,
-            );
-        }
-        for (j, (&p, hit)) in live.iter().zip(hits).enumerate() {
-            let on = if let Some(Shaded { event, going_on }) = shaded[j].take() {
-                events.extend(event);
-                going_on
-            } else {
-                let (sample, path) = &mut flight[p];
-                hit.as_ref().is_some_and(|hit| {
-                    let sampler = Sampler::new(seed, pixels[p].0, *sample);
-                    shade_hit(
-                        scene,
-                        path,
-                        hit,
-                        &sampler,
-                        light_samples,
-                        faults,
-                        &mut events,
-                    )
-                })
+        event_lanes.clear();
+        for l in lanes_of(slot.live) {
+            let Some(hit) = &hits[l] else {
+                // Nothing is outside the scene: a miss ends the path.
+                ended |= 1 << l;
+                continue;
             };
-            going_on.push(on);
-            event_ends.push(events.len());
+            if light_samples <= 1 && scene.materials[hit.material as usize].kind == KIND_DIFFUSE {
+                diffuse |= 1 << l;
+                continue;
+            }
+            let mut path = slot.path(l);
+            let sampler = Sampler::new(seed, slot.stream.as_array()[l], slot.sample.as_array()[l]);
+            let on = shade_hit(
+                scene,
+                &mut path,
+                hit,
+                &sampler,
+                light_samples,
+                faults,
+                &mut events,
+            );
+            slot.set_path(l, &path);
+            event_lanes.resize(events.len(), l);
+            ended |= u32::from(!on) << l;
         }
+        let lit = shade_diffuse_lanes(scene, seed, &hits, diffuse, &mut slot, faults);
+        ended |= diffuse & !lit.going_on;
+
+        let blocked_lanes = occluded_lanes(scene, (&lit.origin, &lit.to_light), lit.clear);
+        *rays += u64::from(lit.clear.count_ones());
         shadow_rays.clear();
         shadow_rays.extend(events.iter().map(|e: &NextEvent| e.ray));
-        if blocked.len() < events.len() {
-            blocked.resize(events.len(), false);
-        }
-        occluded_all(scene, &shadow_rays, &mut blocked[..events.len()]);
+        blocked.resize(events.len(), false);
+        occluded_all(scene, &shadow_rays, &mut blocked);
         *rays += events.len() as u64;
 
-        // Each path takes its unblocked shadow rays' light, in order; a path that ended adds
-        // its sample to its pixel and starts the pixel's next one.
-        let mut e = 0;
-        let mut j = 0;
-        live.retain(|&p| {
-            let (sample, path) = &mut flight[p];
-            for k in e..event_ends[j] {
-                add_next_event(path, &events[k], !blocked[k]);
+        // Each path takes its unblocked shadow rays' light, in order, and ends its bounce.
+        let unblocked = lanes::mask(lit.clear & !blocked_lanes);
+        slot.radiance = slot
+            .radiance
+            .select_where(unblocked, &slot.radiance.add(&lit.value));
+        for ((&l, event), &b) in event_lanes.iter().zip(&events).zip(&blocked) {
+            if !b {
+                slot.radiance
+                    .set_lane(l, slot.radiance.lane(l) + event.value);
             }
-            end_bounce(path, faults);
-            e = event_ends[j];
-            let on = going_on[j];
-            j += 1;
-            if on {
-                return true;
+        }
+        if faults.grey_indirect {
+            for l in lanes_of(slot.live & hits_of(&hits)) {
+                let mut path = slot.path(l);
+                end_bounce(&mut path, faults);
+                slot.before_indirect[l] = path.before_indirect;
             }
-            stats[p].add(finish_path(path));
-            *sample += 1;
-            if *sample == end {
-                return false;
+        }
+
+        // A path that ended adds its sample to its pixel, and its lane takes the pixel's next
+        // sample, or the next pixel's first.
+        for l in lanes_of(ended) {
+            let p = slot.pixel[l];
+            stats[p].add(finish_path(&slot.path(l)));
+            let sample = slot.sample.as_array()[l] + 1;
+            slot.live &= !(1 << l);
+            if sample < end {
+                start(&mut slot, l, p, sample);
+            } else if next < pixels.len() {
+                start(&mut slot, l, next, first);
+                next += 1;
             }
-            let (index, x, y) = pixels[p];
-            *path = start_path(camera, x, y, &Sampler::new(seed, index, *sample));
-            true
-        });
+        }
     }
 }
 
-/// What a diffuse hit shaded in lanes hands back: its shadow ray, and whether its path goes
-/// on.
-#[derive(Clone, Copy, Debug)]
-struct Shaded {
-    event: Option<NextEvent>,
-    going_on: bool,
-}
-
-/// [`shade_diffuse_lanes`] for a round's diffuse hits `batch` (at most [`LANES`] indices into
-/// the round's `live` paths and their `hits`), each one's result in `shaded` at its index; the
-/// lanes past the batch's end repeat its last hit, and their results are dropped.
+/// The bits of `bits`, lowest first, as lane numbers.
 #[inline]
-fn shade_batch(
-    scene: &FlatScene,
-    seed: u32,
-    pixels: &[(u32, u32, u32)],
-    (live, hits, batch): (&[usize], &[Option<SurfaceHit>], &[usize]),
-    flight: &mut [(u32, PathState)],
-    faults: Faults,
-    shaded: &mut [Option<Shaded>],
-) {
-    let j = |l: usize| batch[l.min(batch.len() - 1)];
-    let hit = |l: usize| hits[j(l)].as_ref().expect("a diffuse hit");
-    let mut lane_hits = [hit(0); LANES];
-    let mut paths = [flight[live[j(0)]].1; LANES];
-    for l in 1..LANES {
-        lane_hits[l] = hit(l);
-        paths[l] = flight[live[j(l)]].1;
+fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let l = bits.trailing_zeros() as usize;
+        bits &= bits.wrapping_sub(1);
+        (l < LANES).then_some(l)
+    })
+}
+
+/// The lanes that hit something, as bits.
+#[inline]
+fn hits_of(hits: &[Option<SurfaceHit>; LANES]) -> u32 {
+    (0..LANES).fold(0, |bits, l| bits | u32::from(hits[l].is_some()) << l)
+}
+
+/// Eight camera samples' paths in SIMD lanes, each of [`PathState`]'s fields a row of eight
+/// (structure of arrays): lane l is the path of sample `sample[l]` of the tile's pixel
+/// `pixel[l]` (whose stream is `stream[l]`), in flight where `live` has bit l.
+#[derive(Clone, Copy, Debug, Default)]
+struct Slot {
+    o: V8,
+    d: V8,
+    radiance: V8,
+    throughput: V8,
+    eta_scale: F8,
+    bsdf_pdf: F8,
+    bounce: U8,
+    before_indirect: [Option<Vec3>; LANES],
+    pixel: [usize; LANES],
+    stream: U8,
+    sample: U8,
+    live: u32,
+}
+
+impl Slot {
+    /// Lane `l`'s path.
+    #[inline]
+    fn path(&self, l: usize) -> PathState {
+        PathState {
+            ray: Ray {
+                o: self.o.lane(l),
+                d: self.d.lane(l),
+            },
+            radiance: self.radiance.lane(l),
+            throughput: self.throughput.lane(l),
+            eta_scale: self.eta_scale.as_array()[l],
+            bsdf_pdf: self.bsdf_pdf.as_array()[l],
+            bounce: self.bounce.as_array()[l],
+            before_indirect: self.before_indirect[l],
+        }
     }
-    let pixel = lanes::uints(|l| pixels[live[j(l)]].0);
-    let sample = lanes::uints(|l| flight[live[j(l)]].0);
-    let mut lane_events = [None; LANES];
-    let mut on = [false; LANES];
-    shade_diffuse_lanes(
-        scene,
-        seed,
-        pixel,
-        sample,
-        &lane_hits,
-        &mut paths,
-        faults,
-        &mut lane_events,
-        &mut on,
-    );
-    for (l, &k) in batch.iter().enumerate() {
-        flight[live[k]].1 = paths[l];
-        shaded[k] = Some(Shaded {
-            event: lane_events[l],
-            going_on: on[l],
-        });
+
+    /// Lane `l`'s path set to `path`.
+    #[inline]
+    fn set_path(&mut self, l: usize, path: &PathState) {
+        self.o.set_lane(l, path.ray.o);
+        self.d.set_lane(l, path.ray.d);
+        self.radiance.set_lane(l, path.radiance);
+        self.throughput.set_lane(l, path.throughput);
+        self.eta_scale.as_mut_array()[l] = path.eta_scale;
+        self.bsdf_pdf.as_mut_array()[l] = path.bsdf_pdf;
+        self.bounce.as_mut_array()[l] = path.bounce;
+        self.before_indirect[l] = path.before_indirect;
     }
 }
 
-/// Steps 3 to 6 of [`shade_hit`] at eight diffuse hits at once, each with one shadow ray, the
-/// arithmetic in SIMD lanes ([`crate::lanes`]): lane l shades `paths[l]` at `hits[l]` with the
-/// numbers of stream (`pixel[l]`, `sample[l]`), puts its shadow ray in `events[l]` and says in
-/// `going_on[l]` whether its path goes on, bit for bit what `shade_hit` does (a test below).
-/// Step 3 adds nothing at a surface that does not emit, so it is left out.
-#[allow(clippy::too_many_arguments)]
+/// What [`shade_diffuse_lanes`] hands back: each lit lane's shadow ray (from `origin` along
+/// `to_light`, the lanes `clear`) and the light it adds where nothing blocks it, and the lanes
+/// whose paths go on.
+struct LitLanes {
+    origin: V8,
+    to_light: V8,
+    value: V8,
+    clear: u32,
+    going_on: u32,
+}
+
+/// Steps 3 to 6 of [`shade_hit`] at the diffuse hits of the slot's lanes `lanes`, each with
+/// one shadow ray, in SIMD lanes ([`crate::lanes`]): lane l shades its path at `hits[l]` with
+/// the numbers of its stream, bit for bit what `shade_hit` does (a test below), and the other
+/// lanes are left as they are. Step 3 adds nothing at a surface that does not emit, so it is
+/// left out.
 #[inline]
 fn shade_diffuse_lanes(
     scene: &FlatScene,
     seed: u32,
-    pixel: U8,
-    sample: U8,
-    hits: &[&SurfaceHit; LANES],
-    paths: &mut [PathState; LANES],
+    hits: &[Option<SurfaceHit>; LANES],
+    lanes: u32,
+    slot: &mut Slot,
     faults: Faults,
-    events: &mut [Option<NextEvent>; LANES],
-    going_on: &mut [bool; LANES],
-) {
+) -> LitLanes {
+    const NONE: SurfaceHit = SurfaceHit {
+        t: 0.0,
+        p: Vec3::ZERO,
+        p_err: Vec3::ZERO,
+        n: Vec3::ZERO,
+        material: 0,
+        prim: 0,
+    };
+    let hit = |l: usize| match &hits[l] {
+        Some(h) if lanes & (1 << l) != 0 => h,
+        _ => &NONE,
+    };
     let (p, p_err, n) = (
-        V8::gather(|l| hits[l].p),
-        V8::gather(|l| hits[l].p_err),
-        V8::gather(|l| hits[l].n),
+        V8::gather(|l| hit(l).p),
+        V8::gather(|l| hit(l).p_err),
+        V8::gather(|l| hit(l).n),
     );
-    let wo = V8::gather(|l| paths[l].ray.d).neg();
-    let albedo = V8::gather(|l| Vec3::from(scene.materials[hits[l].material as usize].color));
-    let throughput = V8::gather(|l| paths[l].throughput);
+    let wo = slot.d.neg();
+    let albedo = V8::gather(|l| Vec3::from(scene.materials[hit(l).material as usize].color));
     let facing = n.neg_where(n.dot(&wo).simd_lt(F8::ZERO));
+    let bounce = slot.bounce.as_array();
 
     // Step 4 - next-event estimation, one light sample (`shade_hit`'s step 4 with N = 1).
     let u_light = lanes::draw4(
         seed,
-        pixel,
-        sample,
-        lanes::uints(|l| dim_light(paths[l].bounce)),
+        slot.stream,
+        slot.sample,
+        lanes::uints(|l| dim_light(bounce[l])),
     );
     let u = u_light.map(|row| row.to_array());
     let mut ls = [LightSample::default(); LANES];
-    for (l, s) in ls.iter_mut().enumerate() {
-        *s = sample_emitter(scene, u[0][l], u[1][l], u[2][l]);
+    for l in lanes_of(lanes) {
+        ls[l] = sample_emitter(scene, u[0][l], u[1][l], u[2][l]);
     }
     let (ls_p, ls_p_err, ls_n, ls_le) = (
         V8::gather(|l| ls[l].p),
@@ -377,34 +393,28 @@ fn shade_diffuse_lanes(
     let cos_l = lanes::neg(ls_n.dot(&wi));
     let origin = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
     let light_point = lanes::offset_ray_origin(&ls_p, &ls_p_err, &ls_n, &wi.neg());
-    let shadow_d = light_point.sub(&origin);
     let light_pdf = lanes::floats(|l| ls[l].pdf_area) * dist2 / cos_l.abs();
     let f = albedo.scale(F8::splat(FRAC_1_PI));
     // The power heuristic against BSDF sampling, as `power_heuristic`.
     let (f2, g) = (light_pdf * light_pdf, cos_s * F8::splat(FRAC_1_PI));
     let sum = f2 + g * g;
     let w = sum.simd_gt(F8::ZERO).select(f2 / sum, F8::ZERO);
-    let value = throughput.mul(&f).mul(&ls_le).scale(cos_s * w / light_pdf);
-    let clear =
-        (cos_s.simd_gt(F8::ZERO) & cos_l.simd_gt(F8::ZERO) & dist2.simd_gt(F8::ZERO)).to_bitmask();
-    let (origin, shadow_d, value) = (origin.lanes(), shadow_d.lanes(), value.lanes());
-    for l in 0..LANES {
-        events[l] = (clear & (1 << l) != 0).then(|| NextEvent {
-            ray: Ray {
-                o: origin[l],
-                d: shadow_d[l],
-            },
-            value: value[l],
-        });
-    }
+    let value = slot
+        .throughput
+        .mul(&f)
+        .mul(&ls_le)
+        .scale(cos_s * w / light_pdf);
+    let clear = lanes
+        & (cos_s.simd_gt(F8::ZERO) & cos_l.simd_gt(F8::ZERO) & dist2.simd_gt(F8::ZERO))
+            .to_bitmask();
 
     // Step 5 - scattering: a cosine-weighted direction about the side wo lies on
-    // (`sample_bsdf`'s diffuse lobe, whose weight is the albedo); step 6 as in `shade_hit`.
+    // (`sample_bsdf`'s diffuse lobe, whose weight is the albedo, its pdf cos θ / π).
     let u_bsdf = lanes::draw4(
         seed,
-        pixel,
-        sample,
-        lanes::uints(|l| dim_bsdf(paths[l].bounce)),
+        slot.stream,
+        slot.sample,
+        lanes::uints(|l| dim_bsdf(bounce[l])),
     );
     let local = lanes::sample_cosine_hemisphere(u_bsdf[0], u_bsdf[1]);
     let (t, b) = lanes::orthonormal_basis(&facing);
@@ -412,18 +422,44 @@ fn shade_diffuse_lanes(
         .scale(local.x)
         .add(&b.scale(local.y))
         .add(&facing.scale(local.z));
-    let pdf = (local.z * F8::splat(FRAC_1_PI)).to_array();
-    let ray_o = lanes::offset_ray_origin(&p, &p_err, &n, &wi).lanes();
-    let (wi, albedo) = (wi.lanes(), albedo.lanes());
-    let u_roulette = u_light[3].to_array();
-    for l in 0..LANES {
-        let bs = BsdfSample {
-            wi: wi[l],
-            weight: albedo[l],
-            pdf: pdf[l],
-            eta2: 1.0,
-        };
-        going_on[l] = take_bsdf_sample(&mut paths[l], &bs, || ray_o[l], u_roulette[l], faults);
+    let pdf = local.z * F8::splat(FRAC_1_PI);
+    let ray_o = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
+
+    // `take_bsdf_sample` in lanes: the throughput takes the weight (and the specular fault
+    // where the pdf is 0), the eta scale stays (its factor is 1), the next ray leaves where
+    // the throughput is not all 0, then step 6's roulette.
+    let shaded = lanes::mask(lanes);
+    let mut throughput = slot.throughput.mul(&albedo);
+    throughput = throughput.select_where(
+        pdf.simd_eq(F8::ZERO),
+        &throughput.scale(F8::splat(faults.specular_scale)),
+    );
+    let carries = shaded & !throughput.max_element().simd_le(F8::ZERO);
+    slot.o = slot.o.select_where(carries, &ray_o);
+    slot.d = slot.d.select_where(carries, &wi);
+    // Step 6 - Russian roulette (`take_bsdf_sample`): from bounce RR_START_BOUNCE on,
+    // continue with probability q = min(max(throughput) · eta_scale, 0.95) and divide by q.
+    let rouletted = slot.bounce.simd_gt(U8::splat(RR_START_BOUNCE - 1));
+    let rouletted: F8 = bytemuck::cast(rouletted);
+    let q = throughput.max_element() * slot.eta_scale;
+    let q = q
+        .simd_lt(F8::splat(RR_MAX_SURVIVAL))
+        .select(q, F8::splat(RR_MAX_SURVIVAL));
+    let survives = !u_light[3].simd_ge(q);
+    let divided = carries & rouletted & survives;
+    throughput = throughput.select_where(divided, &throughput.div(q));
+    let goes_on = carries & (!rouletted | survives);
+    slot.throughput = slot.throughput.select_where(shaded, &throughput);
+    slot.bsdf_pdf = shaded.select(pdf, slot.bsdf_pdf);
+    let goes_on_bits = goes_on.to_bitmask();
+    slot.bounce = bytemuck::cast::<F8, U8>(goes_on).select(slot.bounce + U8::splat(1), slot.bounce);
+    let under_max = slot.bounce.simd_lt(U8::splat(faults.max_bounces));
+    LitLanes {
+        origin,
+        to_light: light_point.sub(&origin),
+        value,
+        clear,
+        going_on: goes_on_bits & bytemuck::cast::<U8, F8>(under_max).to_bitmask(),
     }
 }
 
@@ -676,8 +712,9 @@ mod tests {
     /// eight to a batch of lanes, are `trace_path`'s one at a time, bit for bit: every pixel's
     /// sums of a 13x11 block (not a multiple of the packet), samples 3 to 10, on the rooms with
     /// mirrors, glass and spheres and on the all-diffuse box, with one shadow ray a vertex (the
-    /// lanes) and with two (one by one), and with the grey-indirect fault, whose snapshot must
-    /// come after the vertex's next-event light.
+    /// lanes) and with two (one by one), with the grey-indirect fault, whose snapshot must
+    /// come after the vertex's next-event light, and with a maximum depth and a darkened
+    /// specular bounce, which the lanes' roulette and weight must apply as `take_bsdf_sample`.
     #[test]
     fn the_wavefront_traces_each_samples_own_path_bit_for_bit() {
         for name in ["tncg15_room", "glass_room", "cornell_box"] {
@@ -692,7 +729,14 @@ mod tests {
                 grey_indirect: true,
                 ..Faults::NONE
             };
-            for (light_samples, faults) in [(1, Faults::NONE), (2, Faults::NONE), (1, grey)] {
+            let short = Faults {
+                max_bounces: 4,
+                specular_scale: 0.5,
+                ..Faults::NONE
+            };
+            for (light_samples, faults) in
+                [(1, Faults::NONE), (2, Faults::NONE), (1, grey), (1, short)]
+            {
                 let mut together = vec![PixelStats::default(); pixels.len()];
                 let (mut rays_together, mut rays_alone) = (0, 0);
                 trace_pixels(
