@@ -215,6 +215,38 @@ impl V8 {
     }
 }
 
+/// [`crate::geometry::triangle_hit_point`] in lanes, for the triangles of corners `p0`, `p1`,
+/// `p2` and unit normals `n` at barycentrics (`b1`, `b2`): the point and its error bound, and
+/// the mask of the lanes where that is the scalar function's result, the point lying at least
+/// its margin from every edge (or the triangle being degenerate). In the other lanes the scalar
+/// function moves the point inward; they are left to it.
+#[inline(always)]
+pub fn triangle_hit_point(p0: &V8, p1: &V8, p2: &V8, n: &V8, b1: F8, b2: F8) -> (V8, V8, F8) {
+    // `triangle_point`: p = b0 p0 + b1 p1 + b2 p2, error gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|)
+    let b0 = f32x8::splat(1.0) - b1 - b2;
+    let (w0, w1, w2) = (p0.scale(b0), p1.scale(b1), p2.scale(b2));
+    let p = w0.add(&w1).add(&w2);
+    let p_err = w0
+        .abs()
+        .add(&w1.abs())
+        .add(&w2.abs())
+        .scale(f32x8::splat(crate::geometry::gamma(7)));
+    // The edges' margins: 2A = ((p1 - p0) x (p2 - p0)) . n, m = 2 |p_err|_1
+    let (e1, e2) = (p1.sub(p0), p2.sub(p0));
+    let cross = V8 {
+        x: e1.y * e2.z - e2.y * e1.z,
+        y: e1.z * e2.x - e2.z * e1.x,
+        z: e1.x * e2.y - e2.x * e1.y,
+    };
+    let two_area = cross.dot(n);
+    let margin = f32x8::splat(2.0) * (p_err.x + p_err.y + p_err.z);
+    let length = |v: &V8| v.dot(v).sqrt();
+    let per_area = margin / two_area;
+    let least = [length(&p2.sub(p1)), length(&e2), length(&e1)].map(|e| e * per_area);
+    let inside = b0.simd_ge(least[0]) & b1.simd_ge(least[1]) & b2.simd_ge(least[2]);
+    (p, p_err, inside | !two_area.simd_gt(f32x8::ZERO))
+}
+
 /// The float mask (all bits set, or none) of the lanes whose bits are set in `bits`.
 #[inline(always)]
 pub fn mask(bits: u32) -> F8 {

@@ -25,7 +25,7 @@
 use crate::bvh::{intersect_closest, occluded};
 use crate::flat::FlatScene;
 use crate::geometry::{Ray, SurfaceHit};
-use crate::lanes::V8;
+use crate::lanes::{F8, V8};
 
 /// The most rays a packet holds.
 pub const PACKET: usize = 8;
@@ -86,29 +86,73 @@ pub fn occluded_all(scene: &FlatScene, rays: &[Ray], blocked: &mut [bool]) {
     }
 }
 
+/// Eight rays' nearest hits in rows: the lanes that hit something (`hit`, bits) and, in those,
+/// what [`SurfaceHit`] holds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct HitLanes {
+    pub hit: u32,
+    pub t: F8,
+    pub p: V8,
+    pub p_err: V8,
+    pub n: V8,
+    pub material: [u32; PACKET],
+    pub prim: [u32; PACKET],
+}
+
+impl HitLanes {
+    /// Lane `l`'s hit (which must be one of `hit`'s).
+    #[inline]
+    pub fn get(&self, l: usize) -> SurfaceHit {
+        SurfaceHit {
+            t: self.t.as_array()[l],
+            p: self.p.lane(l),
+            p_err: self.p_err.lane(l),
+            n: self.n.lane(l),
+            material: self.material[l],
+            prim: self.prim[l],
+        }
+    }
+
+    /// Lane `l` set to `hit`.
+    #[inline]
+    fn set(&mut self, l: usize, hit: Option<SurfaceHit>) {
+        let Some(h) = hit else {
+            self.hit &= !(1 << l);
+            return;
+        };
+        self.hit |= 1 << l;
+        self.t.as_mut_array()[l] = h.t;
+        self.p.set_lane(l, h.p);
+        self.p_err.set_lane(l, h.p_err);
+        self.n.set_lane(l, h.n);
+        self.material[l] = h.material;
+        self.prim[l] = h.prim;
+    }
+}
+
 /// The nearest hit of each ray in `lanes` (bits) of eight rays given as rows (`o`, `d`: a
 /// coordinate of every lane per row, as a wavefront holds them in structure-of-arrays form),
-/// as [`intersect_closest`] finds it: one packet, without gathering the rays, where the tree is
-/// small ([`PACKET_CLOSEST_MAX_NODES`]) and the CPU has AVX, else lane by lane. A lane outside
-/// `lanes` gets None.
-pub fn intersect_closest_lanes(
-    scene: &FlatScene,
-    (o, d): (&V8, &V8),
-    lanes: u32,
-    hits: &mut [Option<SurfaceHit>; PACKET],
-) {
+/// as [`intersect_closest`] finds it, in rows: one packet, without gathering the rays, where
+/// the tree is small ([`PACKET_CLOSEST_MAX_NODES`]) and the CPU has AVX, its triangle hits'
+/// points computed in lanes ([`crate::lanes::triangle_hit_point`]); else lane by lane. A
+/// lane outside `lanes` hits nothing.
+pub fn intersect_closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> HitLanes {
     #[cfg(target_arch = "x86_64")]
     if scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES && std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX (checked above).
-        unsafe { avx::closest_lanes(scene, (o, d), lanes, hits) };
-        return;
+        return unsafe { avx::closest_lanes(scene, (o, d), lanes) };
     }
-    let (o, d) = (o.lanes(), d.lanes());
-    for (l, h) in hits.iter_mut().enumerate() {
-        *h = (lanes & (1 << l) != 0)
-            .then(|| intersect_closest(scene, &Ray { o: o[l], d: d[l] }, f32::MAX))
-            .flatten();
+    let mut hits = HitLanes::default();
+    for l in 0..PACKET {
+        if lanes & (1 << l) != 0 {
+            let ray = Ray {
+                o: o.lane(l),
+                d: d.lane(l),
+            };
+            hits.set(l, intersect_closest(scene, &ray, f32::MAX));
+        }
     }
+    hits
 }
 
 /// Of eight shadow segments given as rows (`o + t d`, t in (0, 1)), those in `lanes` (bits)
@@ -128,10 +172,11 @@ pub fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
+    use super::HitLanes;
     use crate::bvh::{surface_hit, Candidate, WIDE_STACK_SIZE};
     use crate::flat::{FlatScene, Sphere, EMPTY_SLOT, PRIM_SPHERE_BIT};
     use crate::geometry::{gamma, Ray, SurfaceHit};
-    use crate::lanes::V8;
+    use crate::lanes::{F8, V8};
     use std::arch::x86_64::*;
 
     /// Up to eight rays, a coordinate per vector, and what the traversal keeps per lane.
@@ -520,42 +565,78 @@ mod avx {
         }
     }
 
-    /// [`closest`] for the lanes `lanes` of eight rays in rows.
+    /// [`closest`] for the lanes `lanes` of eight rays in rows, the hits in rows: the
+    /// triangles' points in lanes, where the scalar `triangle_hit_point` would not move them
+    /// inward (nearly everywhere), the others' and the spheres' lane by lane.
     ///
     /// # Safety
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
-    pub unsafe fn closest_lanes(
-        scene: &FlatScene,
-        (o, d): (&V8, &V8),
-        lanes: u32,
-        hits: &mut [Option<SurfaceHit>; 8],
-    ) {
+    pub unsafe fn closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> HitLanes {
         let p = from_rows(
             [row(&o.x), row(&o.y), row(&o.z)],
             [row(&d.x), row(&d.y), row(&d.z)],
             lanes as i32,
         );
         let (t, b1, b2, held) = closest_packet(scene, p);
-        let (oa, da) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
-        for (l, h) in hits.iter_mut().enumerate() {
-            *h = (held[l] != NO_PRIM).then(|| {
-                let c = Candidate {
-                    t: t[l],
-                    prim: held[l],
-                    b1: b1[l],
-                    b2: b2[l],
-                };
-                let lane = |v: &[crate::lanes::F8; 3]| {
-                    glam::Vec3::new(v[0].as_array()[l], v[1].as_array()[l], v[2].as_array()[l])
-                };
-                let ray = Ray {
-                    o: lane(&oa),
-                    d: lane(&da),
-                };
-                surface_hit(scene, &ray, c)
-            });
+        let mut hits = HitLanes {
+            t: F8::new(t),
+            prim: held,
+            ..HitLanes::default()
+        };
+        let (mut triangles, mut others) = (0u32, 0u32);
+        for (l, &prim) in held.iter().enumerate() {
+            if prim == NO_PRIM {
+                continue;
+            }
+            hits.hit |= 1 << l;
+            if prim & PRIM_SPHERE_BIT == 0 {
+                triangles |= 1 << l;
+            } else {
+                others |= 1 << l;
+            }
         }
+        if triangles != 0 {
+            let tri = |l: usize| {
+                &scene.triangles[if triangles & (1 << l) != 0 {
+                    held[l]
+                } else {
+                    held[triangles.trailing_zeros() as usize]
+                } as usize]
+            };
+            let corner = |f: fn(&crate::flat::Triangle) -> [f32; 3]| {
+                V8::gather(|l| glam::Vec3::from(f(tri(l))))
+            };
+            let (p0, p1, p2, n) = (
+                corner(|t| t.v0),
+                corner(|t| t.v1),
+                corner(|t| t.v2),
+                corner(|t| t.n),
+            );
+            let (point, p_err, kept) =
+                crate::lanes::triangle_hit_point(&p0, &p1, &p2, &n, F8::new(b1), F8::new(b2));
+            (hits.p, hits.p_err, hits.n) = (point, p_err, n);
+            for l in 0..8 {
+                hits.material[l] = tri(l).material;
+            }
+            others |= triangles & !kept.to_bitmask();
+        }
+        while others != 0 {
+            let l = others.trailing_zeros() as usize;
+            others &= others - 1;
+            let c = Candidate {
+                t: t[l],
+                prim: held[l],
+                b1: b1[l],
+                b2: b2[l],
+            };
+            let ray = Ray {
+                o: o.lane(l),
+                d: d.lane(l),
+            };
+            hits.set(l, Some(surface_hit(scene, &ray, c)));
+        }
+        hits
     }
 
     /// The traversal of [`closest`]: each lane's nearest t, barycentrics and primitive

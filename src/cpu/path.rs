@@ -24,7 +24,7 @@ use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
 use crate::lanes::{self, F8, LANES, U8, V8};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, LightSample};
-use crate::packet::{intersect_closest_lanes, occluded_all, occluded_lanes};
+use crate::packet::{intersect_closest_lanes, occluded_all, occluded_lanes, HitLanes};
 use crate::sampling::{
     dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA, MAX_LIGHT_SAMPLES,
 };
@@ -168,13 +168,12 @@ pub fn trace_pixels(
         start(&mut slot, l, next, first);
         next += 1;
     }
-    let mut hits = [None; LANES];
     // The shadow rays of the hits shaded one by one, each with its lane.
     let (mut events, mut event_lanes, mut shadow_rays, mut blocked) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     while slot.live != 0 {
         // Step 2 - closest hit, the eight rays as one packet.
-        intersect_closest_lanes(scene, (&slot.o, &slot.d), slot.live, &mut hits);
+        let hits = intersect_closest_lanes(scene, (&slot.o, &slot.d), slot.live);
         *rays += u64::from(slot.live.count_ones());
 
         // Steps 3 to 6 at each hit: diffuse hits with one shadow ray in lanes, the others one
@@ -183,21 +182,23 @@ pub fn trace_pixels(
         events.clear();
         event_lanes.clear();
         for l in lanes_of(slot.live) {
-            let Some(hit) = &hits[l] else {
+            if hits.hit & (1 << l) == 0 {
                 // Nothing is outside the scene: a miss ends the path.
                 ended |= 1 << l;
                 continue;
-            };
-            if light_samples <= 1 && scene.materials[hit.material as usize].kind == KIND_DIFFUSE {
+            }
+            if light_samples <= 1 && scene.materials[hits.material[l] as usize].kind == KIND_DIFFUSE
+            {
                 diffuse |= 1 << l;
                 continue;
             }
+            let hit = hits.get(l);
             let mut path = slot.path(l);
             let sampler = Sampler::new(seed, slot.stream.as_array()[l], slot.sample.as_array()[l]);
             let on = shade_hit(
                 scene,
                 &mut path,
-                hit,
+                &hit,
                 &sampler,
                 light_samples,
                 faults,
@@ -230,7 +231,7 @@ pub fn trace_pixels(
             }
         }
         if faults.grey_indirect {
-            for l in lanes_of(slot.live & hits_of(&hits)) {
+            for l in lanes_of(slot.live & hits.hit) {
                 let mut path = slot.path(l);
                 end_bounce(&mut path, faults);
                 slot.before_indirect[l] = path.before_indirect;
@@ -262,12 +263,6 @@ fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
         bits &= bits.wrapping_sub(1);
         (l < LANES).then_some(l)
     })
-}
-
-/// The lanes that hit something, as bits.
-#[inline]
-fn hits_of(hits: &[Option<SurfaceHit>; LANES]) -> u32 {
-    (0..LANES).fold(0, |bits, l| bits | u32::from(hits[l].is_some()) << l)
 }
 
 /// Eight camera samples' paths in SIMD lanes, each of [`PathState`]'s fields a row of eight
@@ -341,30 +336,14 @@ struct LitLanes {
 fn shade_diffuse_lanes(
     scene: &FlatScene,
     seed: u32,
-    hits: &[Option<SurfaceHit>; LANES],
+    hits: &HitLanes,
     lanes: u32,
     slot: &mut Slot,
     faults: Faults,
 ) -> LitLanes {
-    const NONE: SurfaceHit = SurfaceHit {
-        t: 0.0,
-        p: Vec3::ZERO,
-        p_err: Vec3::ZERO,
-        n: Vec3::ZERO,
-        material: 0,
-        prim: 0,
-    };
-    let hit = |l: usize| match &hits[l] {
-        Some(h) if lanes & (1 << l) != 0 => h,
-        _ => &NONE,
-    };
-    let (p, p_err, n) = (
-        V8::gather(|l| hit(l).p),
-        V8::gather(|l| hit(l).p_err),
-        V8::gather(|l| hit(l).n),
-    );
+    let (p, p_err, n) = (&hits.p, &hits.p_err, &hits.n);
     let wo = slot.d.neg();
-    let albedo = V8::gather(|l| Vec3::from(scene.materials[hit(l).material as usize].color));
+    let albedo = V8::gather(|l| Vec3::from(scene.materials[hits.material[l] as usize].color));
     let facing = n.neg_where(n.dot(&wo).simd_lt(F8::ZERO));
     let bounce = slot.bounce.as_array();
 
