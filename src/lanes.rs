@@ -215,14 +215,11 @@ impl V8 {
     }
 }
 
-/// [`crate::geometry::triangle_hit_point`] in lanes, for the triangles of corners `p0`, `p1`,
-/// `p2` and unit normals `n` at barycentrics (`b1`, `b2`): the point and its error bound, and
-/// the mask of the lanes where that is the scalar function's result, the point lying at least
-/// its margin from every edge (or the triangle being degenerate). In the other lanes the scalar
-/// function moves the point inward; they are left to it.
+/// [`crate::geometry::triangle_point`] in lanes: the point of the triangles of corners `p0`,
+/// `p1`, `p2` at barycentrics (1 - b1 - b2, `b1`, `b2`), b0 p0 + b1 p1 + b2 p2, and its error
+/// bound gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|).
 #[inline(always)]
-pub fn triangle_hit_point(p0: &V8, p1: &V8, p2: &V8, n: &V8, b1: F8, b2: F8) -> (V8, V8, F8) {
-    // `triangle_point`: p = b0 p0 + b1 p1 + b2 p2, error gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|)
+pub fn triangle_point(p0: &V8, p1: &V8, p2: &V8, b1: F8, b2: F8) -> (V8, V8) {
     let b0 = f32x8::splat(1.0) - b1 - b2;
     let (w0, w1, w2) = (p0.scale(b0), p1.scale(b1), p2.scale(b2));
     let p = w0.add(&w1).add(&w2);
@@ -231,6 +228,18 @@ pub fn triangle_hit_point(p0: &V8, p1: &V8, p2: &V8, n: &V8, b1: F8, b2: F8) -> 
         .add(&w1.abs())
         .add(&w2.abs())
         .scale(f32x8::splat(crate::geometry::gamma(7)));
+    (p, p_err)
+}
+
+/// [`crate::geometry::triangle_hit_point`] in lanes, for the triangles of corners `p0`, `p1`,
+/// `p2` and unit normals `n` at barycentrics (`b1`, `b2`): the point and its error bound, and
+/// the mask of the lanes where that is the scalar function's result, the point lying at least
+/// its margin from every edge (or the triangle being degenerate). In the other lanes the scalar
+/// function moves the point inward; they are left to it.
+#[inline(always)]
+pub fn triangle_hit_point(p0: &V8, p1: &V8, p2: &V8, n: &V8, b1: F8, b2: F8) -> (V8, V8, F8) {
+    let (p, p_err) = triangle_point(p0, p1, p2, b1, b2);
+    let b0 = f32x8::splat(1.0) - b1 - b2;
     // The edges' margins: 2A = ((p1 - p0) x (p2 - p0)) . n, m = 2 |p_err|_1
     let (e1, e2) = (p1.sub(p0), p2.sub(p0));
     let cross = V8 {

@@ -1,8 +1,9 @@
 //! Area lights: choosing an emitter (a triangle or a sphere) by power, a uniform point on it, and
 //! the pdf of that choice with respect to solid angle at the receiving point.
 
-use crate::flat::{FlatScene, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
+use crate::flat::{FlatScene, Triangle, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
 use crate::geometry::{sphere_point_at, triangle_normal, triangle_point};
+use crate::lanes::{self, F8, LANES, V8};
 use crate::sampling::{
     orthonormal_basis, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
 };
@@ -83,6 +84,89 @@ pub fn sample_emitter(scene: &FlatScene, u_select: f32, u1: f32, u2: f32) -> Lig
         le: Vec3::from(scene.materials[tri.material as usize].emission),
         pdf_area,
     }
+}
+
+/// Points on emitters in lanes, as [`LightSample`] holds one.
+#[derive(Clone, Copy, Debug)]
+pub struct LightLanes {
+    pub p: V8,
+    pub p_err: V8,
+    pub n: V8,
+    pub le: V8,
+    pub pdf_area: F8,
+}
+
+/// [`sample_emitter`] in the lanes `lanes` (bits), lane l with the numbers (`u_select`,
+/// `u1`, `u2`) of its lane: the emitter chosen lane by lane, then the points on emitter
+/// triangles in SIMD lanes (`sample_uniform_triangle` and `triangle_point`, operation for
+/// operation), on spheres lane by lane. The other lanes hold no sample.
+#[inline]
+pub fn sample_emitter_lanes(
+    scene: &FlatScene,
+    u_select: F8,
+    u1: F8,
+    u2: F8,
+    lanes: u32,
+) -> LightLanes {
+    let (us, uo1, uo2) = (u_select.as_array(), u1.as_array(), u2.as_array());
+    let mut rows = [scene.emitters[0]; LANES];
+    let mut spheres = 0u32;
+    for l in 0..LANES {
+        if lanes & (1 << l) != 0 {
+            rows[l] = scene.emitters[choose_emitter(scene, us[l])];
+            spheres |= u32::from(rows[l].prim & PRIM_SPHERE_BIT != 0) << l;
+        }
+    }
+    // A triangle for every lane (a lane without one repeats the first), whose results the
+    // sphere lanes replace below.
+    let fallback = scene
+        .emitters
+        .iter()
+        .find(|e| e.prim & PRIM_SPHERE_BIT == 0);
+    let tri = |l: usize| {
+        let prim = if spheres & (1 << l) == 0 {
+            rows[l].prim
+        } else {
+            fallback.map_or(0, |e| e.prim)
+        };
+        scene.triangles.get(prim as usize)
+    };
+    let corner = |f: fn(&Triangle) -> [f32; 3]| {
+        V8::gather(|l| tri(l).map_or(Vec3::ZERO, |t| Vec3::from(f(t))))
+    };
+    // `sample_uniform_triangle`: sqrt(u1) (1 - u2) and sqrt(u1) u2
+    let su = u1.sqrt();
+    let (b1, b2) = (su * (F8::splat(1.0) - u2), su * u2);
+    let (p, p_err) = lanes::triangle_point(
+        &corner(|t| t.v0),
+        &corner(|t| t.v1),
+        &corner(|t| t.v2),
+        b1,
+        b2,
+    );
+    let mut out = LightLanes {
+        p,
+        p_err,
+        n: corner(|t| t.n),
+        le: V8::gather(|l| {
+            tri(l).map_or(Vec3::ZERO, |t| {
+                Vec3::from(scene.materials[t.material as usize].emission)
+            })
+        }),
+        pdf_area: lanes::floats(|l| rows[l].pmf) / lanes::floats(|l| rows[l].area),
+    };
+    let mut sphere_lanes = spheres & lanes;
+    while sphere_lanes != 0 {
+        let l = sphere_lanes.trailing_zeros() as usize;
+        sphere_lanes &= sphere_lanes - 1;
+        let s = sample_emitter(scene, us[l], uo1[l], uo2[l]);
+        out.p.set_lane(l, s.p);
+        out.p_err.set_lane(l, s.p_err);
+        out.n.set_lane(l, s.n);
+        out.le.set_lane(l, s.le);
+        out.pdf_area.as_mut_array()[l] = s.pdf_area;
+    }
+    out
 }
 
 /// Where a light subpath starts (light tracing, BDPT): a point on an emitter and a direction

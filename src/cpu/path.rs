@@ -23,7 +23,7 @@ use crate::film::PixelStats;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
 use crate::lanes::{self, F8, LANES, U8, V8};
-use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, LightSample};
+use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, sample_emitter_lanes};
 use crate::packet::{intersect_closest_lanes, occluded_all, occluded_lanes, HitLanes};
 use crate::sampling::{
     dim_bsdf, dim_light, dim_light_extra, power_heuristic, Sampler, DIM_CAMERA, MAX_LIGHT_SAMPLES,
@@ -178,20 +178,17 @@ pub fn trace_pixels(
 
         // Steps 3 to 6 at each hit: diffuse hits with one shadow ray in lanes, the others one
         // by one; the shadow rays of step 4 wait to be traced together.
-        let (mut diffuse, mut ended) = (0u32, 0u32);
         events.clear();
         event_lanes.clear();
-        for l in lanes_of(slot.live) {
-            if hits.hit & (1 << l) == 0 {
-                // Nothing is outside the scene: a miss ends the path.
-                ended |= 1 << l;
-                continue;
-            }
-            if light_samples <= 1 && scene.materials[hits.material[l] as usize].kind == KIND_DIFFUSE
-            {
-                diffuse |= 1 << l;
-                continue;
-            }
+        // A miss ends the path: nothing is outside the scene.
+        let mut ended = slot.live & !hits.hit;
+        let kinds = lanes::uints(|l| scene.materials[hits.material[l] as usize].kind);
+        let diffuse = if light_samples <= 1 {
+            slot.live & hits.hit & kinds.simd_eq(U8::splat(KIND_DIFFUSE)).to_bitmask()
+        } else {
+            0
+        };
+        for l in lanes_of(slot.live & hits.hit & !diffuse) {
             let hit = hits.get(l);
             let mut path = slot.path(l);
             let sampler = Sampler::new(seed, slot.stream.as_array()[l], slot.sample.as_array()[l]);
@@ -354,17 +351,8 @@ fn shade_diffuse_lanes(
         slot.sample,
         lanes::uints(|l| dim_light(bounce[l])),
     );
-    let u = u_light.map(|row| row.to_array());
-    let mut ls = [LightSample::default(); LANES];
-    for l in lanes_of(lanes) {
-        ls[l] = sample_emitter(scene, u[0][l], u[1][l], u[2][l]);
-    }
-    let (ls_p, ls_p_err, ls_n, ls_le) = (
-        V8::gather(|l| ls[l].p),
-        V8::gather(|l| ls[l].p_err),
-        V8::gather(|l| ls[l].n),
-        V8::gather(|l| ls[l].le),
-    );
+    let ls = sample_emitter_lanes(scene, u_light[0], u_light[1], u_light[2], lanes);
+    let (ls_p, ls_p_err, ls_n, ls_le) = (ls.p, ls.p_err, ls.n, ls.le);
     let to_light = ls_p.sub(&p);
     let dist2 = to_light.dot(&to_light);
     let wi = to_light.div(dist2.sqrt());
@@ -372,7 +360,7 @@ fn shade_diffuse_lanes(
     let cos_l = lanes::neg(ls_n.dot(&wi));
     let origin = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
     let light_point = lanes::offset_ray_origin(&ls_p, &ls_p_err, &ls_n, &wi.neg());
-    let light_pdf = lanes::floats(|l| ls[l].pdf_area) * dist2 / cos_l.abs();
+    let light_pdf = ls.pdf_area * dist2 / cos_l.abs();
     let f = albedo.scale(F8::splat(FRAC_1_PI));
     // The power heuristic against BSDF sampling, as `power_heuristic`.
     let (f2, g) = (light_pdf * light_pdf, cos_s * F8::splat(FRAC_1_PI));
