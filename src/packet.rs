@@ -447,15 +447,19 @@ mod avx {
         while top > 0 && p.active != 0 {
             top -= 1;
             let node = &scene.wide[stack[top] as usize];
-            // Every slot's slab test first, without a branch on its outcome: the children that
-            // an active lane enters, as bits, and each one's entry and exit distances.
+            // Every occupied slot's slab test first (a node's empty slots come after its
+            // children, `wide_bvh::collapse`), without a branch on its outcome: the children
+            // that an active lane enters, as bits, and each one's entry and exit distances.
             let mut spans = [(_mm256_setzero_ps(), _mm256_setzero_ps()); crate::wide_bvh::WIDTH];
             let mut children = 0u32;
             for (c, span_c) in spans.iter_mut().enumerate() {
+                if node.count[c] == EMPTY_SLOT {
+                    break;
+                }
                 let (lo, hi) = node.child_bounds(c);
                 *span_c = span(p, lo.to_array(), hi.to_array());
                 let entered = _mm256_movemask_ps(within(*span_c, *t_limit)) & p.active;
-                children |= u32::from((entered != 0) & (node.count[c] != EMPTY_SLOT)) << c;
+                children |= u32::from(entered != 0) << c;
             }
             // Then those children in slot order, each against the limit as it stands when its
             // turn comes: a leaf before it may have lowered the limit, and a lower limit enters
