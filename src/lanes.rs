@@ -83,6 +83,47 @@ impl V8 {
         }
     }
 
+    /// The 3-vectors at float `offset` of records `index[l]` of `records` (a `Pod` record of
+    /// whole floats or integers, as the scene's tables are), one per lane: with AVX2's gather
+    /// instruction where the build has it, three loads for the eight lanes, else lane by lane.
+    /// The values are loaded, not computed, so both ways give the same bits.
+    ///
+    /// # Panics
+    /// If an index is past the records, or the offset past a record.
+    #[inline(always)]
+    pub fn gather_from<T: bytemuck::Pod>(records: &[T], index: U8, offset: usize) -> V8 {
+        let stride = std::mem::size_of::<T>() / 4;
+        assert!(std::mem::size_of::<T>() % 4 == 0 && offset + 3 <= stride);
+        assert!(index.reduce_max() < records.len() as u32);
+        let floats: &[f32] = bytemuck::cast_slice(records);
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+        {
+            use std::arch::x86_64::{__m256, __m256i, _mm256_i32gather_ps};
+            assert!(floats.len() <= i32::MAX as usize);
+            let at: __m256i =
+                bytemuck::cast(index * u32x8::splat(stride as u32) + u32x8::splat(offset as u32));
+            let row = |k: usize| -> f32x8 {
+                // SAFETY: the build has AVX2; every lane's index (below records.len() times
+                // the stride, plus at most stride - 1) lies within `floats` (checked above).
+                let v: __m256 = unsafe { _mm256_i32gather_ps::<4>(floats.as_ptr().add(k), at) };
+                bytemuck::cast(v)
+            };
+            V8 {
+                x: row(0),
+                y: row(1),
+                z: row(2),
+            }
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        {
+            let index = index.to_array();
+            V8::gather(|l| {
+                let at = index[l] as usize * stride + offset;
+                Vec3::new(floats[at], floats[at + 1], floats[at + 2])
+            })
+        }
+    }
+
     /// The lanes as eight vectors.
     #[inline(always)]
     pub fn lanes(&self) -> [Vec3; LANES] {

@@ -1,7 +1,7 @@
 //! Area lights: choosing an emitter (a triangle or a sphere) by power, a uniform point on it, and
 //! the pdf of that choice with respect to solid angle at the receiving point.
 
-use crate::flat::{FlatScene, Triangle, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
+use crate::flat::{FlatScene, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
 use crate::geometry::{sphere_point_at, triangle_normal, triangle_point};
 use crate::lanes::{self, F8, LANES, V8};
 use crate::sampling::{
@@ -117,44 +117,37 @@ pub fn sample_emitter_lanes(
             spheres |= u32::from(rows[l].prim & PRIM_SPHERE_BIT != 0) << l;
         }
     }
-    // A triangle for every lane (a lane without one repeats the first), whose results the
-    // sphere lanes replace below.
+    // A triangle for every lane (a lane without one repeats an emitter triangle, or the
+    // first triangle), whose results the sphere lanes replace below.
     let fallback = scene
         .emitters
         .iter()
-        .find(|e| e.prim & PRIM_SPHERE_BIT == 0);
-    let tri = |l: usize| {
-        let prim = if spheres & (1 << l) == 0 {
+        .find(|e| e.prim & PRIM_SPHERE_BIT == 0)
+        .map_or(0, |e| e.prim);
+    let index = lanes::uints(|l| {
+        if rows[l].prim & PRIM_SPHERE_BIT == 0 {
             rows[l].prim
         } else {
-            fallback.map_or(0, |e| e.prim)
-        };
-        scene.triangles.get(prim as usize)
-    };
-    let corner = |f: fn(&Triangle) -> [f32; 3]| {
-        V8::gather(|l| tri(l).map_or(Vec3::ZERO, |t| Vec3::from(f(t))))
-    };
-    // `sample_uniform_triangle`: sqrt(u1) (1 - u2) and sqrt(u1) u2
-    let su = u1.sqrt();
-    let (b1, b2) = (su * (F8::splat(1.0) - u2), su * u2);
-    let (p, p_err) = lanes::triangle_point(
-        &corner(|t| t.v0),
-        &corner(|t| t.v1),
-        &corner(|t| t.v2),
-        b1,
-        b2,
-    );
+            fallback
+        }
+    });
     let mut out = LightLanes {
-        p,
-        p_err,
-        n: corner(|t| t.n),
-        le: V8::gather(|l| {
-            tri(l).map_or(Vec3::ZERO, |t| {
-                Vec3::from(scene.materials[t.material as usize].emission)
-            })
-        }),
+        p: V8::default(),
+        p_err: V8::default(),
+        n: V8::default(),
+        le: V8::default(),
         pdf_area: lanes::floats(|l| rows[l].pmf) / lanes::floats(|l| rows[l].area),
     };
+    if !scene.triangles.is_empty() {
+        let corner = |offset| V8::gather_from(&scene.triangles, index, offset);
+        // `sample_uniform_triangle`: sqrt(u1) (1 - u2) and sqrt(u1) u2
+        let su = u1.sqrt();
+        let (b1, b2) = (su * (F8::splat(1.0) - u2), su * u2);
+        (out.p, out.p_err) = lanes::triangle_point(&corner(0), &corner(4), &corner(8), b1, b2);
+        out.n = corner(12);
+        let material = lanes::uints(|l| scene.triangles[index.as_array()[l] as usize].material);
+        out.le = V8::gather_from(&scene.materials, material, 4);
+    }
     let mut sphere_lanes = spheres & lanes;
     while sphere_lanes != 0 {
         let l = sphere_lanes.trailing_zeros() as usize;

@@ -601,27 +601,22 @@ mod avx {
             }
         }
         if triangles != 0 {
-            let tri = |l: usize| {
-                &scene.triangles[if triangles & (1 << l) != 0 {
+            // Every lane's triangle (a lane without one repeats the first that has one).
+            let first = held[triangles.trailing_zeros() as usize];
+            let index = crate::lanes::uints(|l| {
+                if triangles & (1 << l) != 0 {
                     held[l]
                 } else {
-                    held[triangles.trailing_zeros() as usize]
-                } as usize]
-            };
-            let corner = |f: fn(&crate::flat::Triangle) -> [f32; 3]| {
-                V8::gather(|l| glam::Vec3::from(f(tri(l))))
-            };
-            let (p0, p1, p2, n) = (
-                corner(|t| t.v0),
-                corner(|t| t.v1),
-                corner(|t| t.v2),
-                corner(|t| t.n),
-            );
+                    first
+                }
+            });
+            let corner = |offset| V8::gather_from(&scene.triangles, index, offset);
+            let (p0, p1, p2, n) = (corner(0), corner(4), corner(8), corner(12));
             let (point, p_err, kept) =
                 crate::lanes::triangle_hit_point(&p0, &p1, &p2, &n, F8::new(b1), F8::new(b2));
             (hits.p, hits.p_err, hits.n) = (point, p_err, n);
-            for l in 0..8 {
-                hits.material[l] = tri(l).material;
+            for (l, &i) in index.as_array().iter().enumerate() {
+                hits.material[l] = scene.triangles[i as usize].material;
             }
             others |= triangles & !kept.to_bitmask();
         }

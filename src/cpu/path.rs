@@ -340,7 +340,7 @@ fn shade_diffuse_lanes(
 ) -> LitLanes {
     let (p, p_err, n) = (&hits.p, &hits.p_err, &hits.n);
     let wo = slot.d.neg();
-    let albedo = V8::gather(|l| Vec3::from(scene.materials[hits.material[l] as usize].color));
+    let albedo = V8::gather_from(&scene.materials, U8::new(hits.material), 0);
     let facing = n.neg_where(n.dot(&wo).simd_lt(F8::ZERO));
     let bounce = slot.bounce.as_array();
 
