@@ -442,11 +442,15 @@ mod avx {
         mut leaf: impl FnMut(&mut Packet, &mut __m256, usize, usize, i32, __m256),
     ) {
         // Interior nodes still to visit: at most seven net pushes a level, as in `bvh`.
-        let mut stack = [0u32; WIDE_STACK_SIZE + 1];
-        let mut top = 1;
-        while top > 0 && p.active != 0 {
-            top -= 1;
-            let node = &scene.wide[stack[top] as usize];
+        // (Not an array zeroed per traversal: at 1.7 KB, writing it cost more than a small
+        // tree's whole traversal of a shadow packet.)
+        let mut stack = arrayvec::ArrayVec::<u32, { WIDE_STACK_SIZE + 1 }>::new();
+        stack.push(0);
+        while p.active != 0 {
+            let Some(index) = stack.pop() else {
+                break;
+            };
+            let node = &scene.wide[index as usize];
             // Every occupied slot's slab test first (a node's empty slots come after its
             // children, `wide_bvh::collapse`), without a branch on its outcome: the children
             // that an active lane enters, as bits, and each one's entry and exit distances.
@@ -474,8 +478,7 @@ mod avx {
                     continue;
                 }
                 if count == 0 {
-                    stack[top] = node.child[c];
-                    top += 1;
+                    stack.push(node.child[c]);
                 } else {
                     let first = node.child[c] as usize;
                     leaf(p, t_limit, first, first + count as usize, entered, mask);
