@@ -563,4 +563,96 @@ mod tests {
             }
         }
     }
+
+    /// Triangles of every shape (slivers, a degenerate one, one far from the origin, both
+    /// windings) hit at barycentrics inside, on and beside every edge and corner: in every lane
+    /// the mask says whether `triangle_hit_point` keeps the point, and where it does the point
+    /// and its bound are the scalar ones bit for bit. Both outcomes occur.
+    #[test]
+    fn triangle_hit_points_in_lanes_are_the_scalar_ones_where_kept() {
+        use crate::flat::Triangle;
+        use crate::geometry::{triangle_hit_point as scalar, triangle_point as unmoved};
+        let mut triangles = vec![
+            Triangle::new([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0),
+            Triangle::new([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], 0),
+            Triangle::new([0.0, 0.0, 0.0], [1e3, 0.0, 0.0], [0.0, 1e-4, 0.0], 0),
+            Triangle::new([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], 0),
+            Triangle::new(
+                [1e5, -2e5, 3e4],
+                [1e5 + 3.0, -2e5, 3e4],
+                [1e5, -2e5 + 2.0, 3e4 + 1.0],
+                0,
+            ),
+        ];
+        for i in 0..40u32 {
+            let u = |k: u32| u32_to_unit_f32(sampling::pcg4d([i, k, 5, 6])[0]) * 10.0 - 5.0;
+            triangles.push(Triangle::new(
+                [u(0), u(1), u(2)],
+                [u(3), u(4), u(5)],
+                [u(6), u(7), u(8)],
+                0,
+            ));
+        }
+        let edge = [0.0, 1e-7, 1e-5, 0.25, 0.5, 1.0 - 1e-6, 1.0];
+        let (mut kept, mut moved) = (0, 0);
+        for (i, tri) in triangles.iter().enumerate() {
+            for (j, &b1) in edge.iter().enumerate() {
+                let b2s = floats(|l| edge[(j + l) % edge.len()] * (1.0 - b1));
+                let corner = |v: [f32; 3]| V8::gather(|_| Vec3::from(v));
+                let b1s = F8::splat(b1);
+                let (p, p_err, keep) = triangle_hit_point(
+                    &corner(tri.v0),
+                    &corner(tri.v1),
+                    &corner(tri.v2),
+                    &corner(tri.n),
+                    b1s,
+                    b2s,
+                );
+                let (p, p_err, keep) = (p.lanes(), p_err.lanes(), keep.to_bitmask());
+                for l in 0..LANES {
+                    let b2 = b2s.as_array()[l];
+                    let (want, want_err) = scalar(tri, b1, b2);
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    if keep & (1 << l) != 0 {
+                        kept += 1;
+                        assert_eq!(bits(p[l]), bits(want), "triangle {i}, ({b1}, {b2})");
+                        assert_eq!(bits(p_err[l]), bits(want_err), "triangle {i}, ({b1}, {b2})");
+                        assert_eq!(bits(want), bits(unmoved(tri, b1, b2).0));
+                    } else {
+                        moved += 1;
+                    }
+                }
+            }
+        }
+        assert!(kept > 500 && moved > 100, "{kept} kept, {moved} moved");
+    }
+
+    /// `gather_from` loads lane l's 3-vector from record `index[l]` at the offset, the last
+    /// record and repeated indices included, as reading the record does.
+    #[test]
+    fn gather_from_loads_each_lanes_record() {
+        use crate::flat::Triangle;
+        let triangles: Vec<Triangle> = (0..13)
+            .map(|i| {
+                let f = i as f32;
+                Triangle::new(
+                    [f, f + 0.5, -f],
+                    [2.0 * f, 3.0, f * f],
+                    [-1.0, f, 0.25 * f],
+                    i,
+                )
+            })
+            .collect();
+        for start in 0..13u32 {
+            let index = uints(|l| (start + 5 * l as u32) % 13);
+            for (offset, field) in [(0, 0), (4, 1), (8, 2), (12, 3)] {
+                let got = V8::gather_from(&triangles, index, offset).lanes();
+                for l in 0..LANES {
+                    let t = &triangles[index.as_array()[l] as usize];
+                    let want = [t.v0, t.v1, t.v2, t.n][field];
+                    assert_eq!(got[l].to_array(), want, "record {}", index.as_array()[l]);
+                }
+            }
+        }
+    }
 }

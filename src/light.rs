@@ -262,4 +262,64 @@ mod tests {
             }
         }
     }
+
+    /// A room lit by two emitter triangles of different radiance and two emitter spheres:
+    /// every lane of `sample_emitter_lanes` is `sample_emitter` with that lane's numbers, bit
+    /// for bit, whichever lanes are asked for, and triangles and spheres are both chosen.
+    #[test]
+    fn emitter_points_in_lanes_are_sample_emitters_points() {
+        use super::{sample_emitter, sample_emitter_lanes};
+        use crate::flat::{FlatScene, PRIM_SPHERE_BIT};
+        use crate::lanes::{floats, LANES};
+        use crate::scene::Scene;
+        let json = r#"{
+            "name": "mixed_lights",
+            "camera": {"eye": [0, 0, -5], "look_at": [0, 0, 0], "up": [0, 1, 0], "vfov_deg": 40},
+            "materials": {
+                "wall": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]},
+                "lamp": {"type": "emitter", "radiance": [4, 3, 2]},
+                "bulb": {"type": "emitter", "radiance": [1, 1, 8], "albedo": [0.2, 0.2, 0.2]}
+            },
+            "triangles": [
+                {"v": [[-2, -1, 0], [2, -1, 0], [2, -1, 4]], "material": "wall"},
+                {"v": [[-1, 2, 1], [1, 2, 1], [1, 2, 3]], "material": "lamp"},
+                {"v": [[-1, 2, 1], [1, 2, 3], [-1, 2, 3]], "material": "bulb"}
+            ],
+            "spheres": [
+                {"center": [1.5, 0, 2], "radius": 0.25, "material": "bulb"},
+                {"center": [-1.5, 0.5, 2], "radius": 0.5, "material": "lamp"}
+            ]
+        }"#;
+        let scene = Scene::from_json(json, std::path::Path::new("mixed_lights.json")).unwrap();
+        let flat = FlatScene::build(&scene);
+        let mut chosen = [0u32; 2];
+        for i in 0..400u32 {
+            let u = |k: u32, l: usize| {
+                crate::sampling::u32_to_unit_f32(crate::sampling::pcg4d([i, l as u32, k, 9])[0])
+            };
+            let (us, u1, u2) = (
+                floats(|l| u(0, l)),
+                floats(|l| u(1, l)),
+                floats(|l| u(2, l)),
+            );
+            let lanes = if i % 3 == 0 { 0xff } else { (i * 37) & 0xff };
+            let got = sample_emitter_lanes(&flat, us, u1, u2, lanes);
+            for l in (0..LANES).filter(|l| lanes & (1 << l) != 0) {
+                let want = sample_emitter(&flat, u(0, l), u(1, l), u(2, l));
+                let bits = |v: glam::Vec3| v.to_array().map(f32::to_bits);
+                let lane = |v: &crate::lanes::V8| bits(v.lane(l));
+                assert_eq!(lane(&got.p), bits(want.p), "{i}, lane {l}");
+                assert_eq!(lane(&got.p_err), bits(want.p_err), "{i}, lane {l}");
+                assert_eq!(lane(&got.n), bits(want.n), "{i}, lane {l}");
+                assert_eq!(lane(&got.le), bits(want.le), "{i}, lane {l}");
+                assert_eq!(
+                    got.pdf_area.as_array()[l].to_bits(),
+                    want.pdf_area.to_bits()
+                );
+                let row = flat.emitters[super::choose_emitter(&flat, u(0, l))];
+                chosen[usize::from(row.prim & PRIM_SPHERE_BIT != 0)] += 1;
+            }
+        }
+        assert!(chosen[0] > 100 && chosen[1] > 100, "{chosen:?}");
+    }
 }
