@@ -4,9 +4,10 @@
 //! order and the same step comments; read the two side by side. One difference of schedule: the
 //! shader traces step 4's shadow ray where it is made, while here `shade_hit` hands it out
 //! ([`NextEvent`]) so that [`trace_pixels`] can trace a round's shadow rays together; its light
-//! is added before the next bounce's, the same sum in the same order. And `trace_pixels` shades
-//! a round's diffuse hits eight at a time in SIMD lanes (`shade_diffuse_lanes`): `shade_hit`'s
-//! arithmetic, operation for operation, so each path is the same bit for bit.
+//! is added before the next bounce's, the same sum in the same order. And `trace_pixels` keeps
+//! eight paths in SIMD lanes, each field a row of eight (a `Slot`), and shades their diffuse
+//! hits in those lanes (`shade_diffuse_lanes`): `shade_hit`'s arithmetic, operation for
+//! operation, so each path is the same bit for bit.
 //!
 //! The estimator is unidirectional path tracing with next-event estimation and multiple
 //! importance sampling (Veach's thesis, ch. 9): at each diffuse vertex, direct light is
