@@ -93,7 +93,7 @@ impl V8 {
     #[inline(always)]
     pub fn gather_from<T: bytemuck::Pod>(records: &[T], index: U8, offset: usize) -> V8 {
         let stride = std::mem::size_of::<T>() / 4;
-        assert!(std::mem::size_of::<T>() % 4 == 0 && offset + 3 <= stride);
+        assert!(std::mem::size_of::<T>().is_multiple_of(4) && offset + 3 <= stride);
         assert!(index.reduce_max() < records.len() as u32);
         let floats: &[f32] = bytemuck::cast_slice(records);
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]

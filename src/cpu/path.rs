@@ -354,12 +354,12 @@ fn shade_diffuse_lanes(
     );
     let ls = sample_emitter_lanes(scene, u_light[0], u_light[1], u_light[2], lanes);
     let (ls_p, ls_p_err, ls_n, ls_le) = (ls.p, ls.p_err, ls.n, ls.le);
-    let to_light = ls_p.sub(&p);
+    let to_light = ls_p.sub(p);
     let dist2 = to_light.dot(&to_light);
     let wi = to_light.div(dist2.sqrt());
     let cos_s = facing.dot(&wi);
     let cos_l = lanes::neg(ls_n.dot(&wi));
-    let origin = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
+    let origin = lanes::offset_ray_origin(p, p_err, n, &wi);
     let light_point = lanes::offset_ray_origin(&ls_p, &ls_p_err, &ls_n, &wi.neg());
     let light_pdf = ls.pdf_area * dist2 / cos_l.abs();
     let f = albedo.scale(F8::splat(FRAC_1_PI));
@@ -391,7 +391,7 @@ fn shade_diffuse_lanes(
         .add(&b.scale(local.y))
         .add(&facing.scale(local.z));
     let pdf = local.z * F8::splat(FRAC_1_PI);
-    let ray_o = lanes::offset_ray_origin(&p, &p_err, &n, &wi);
+    let ray_o = lanes::offset_ray_origin(p, p_err, n, &wi);
 
     // `take_bsdf_sample` in lanes: the throughput takes the weight (and the specular fault
     // where the pdf is 0), the eta scale stays (its factor is 1), the next ray leaves where
