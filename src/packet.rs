@@ -219,6 +219,17 @@ mod avx {
         unsafe { _mm256_loadu_ps(a.as_ptr()) }
     }
 
+    /// The packet of the rays `o + t d` of eight lanes' rows, the lanes `lanes` (bits) looking.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn from_lanes((o, d): (&V8, &V8), lanes: u32) -> Packet {
+        from_rows(
+            [row(&o.x), row(&o.y), row(&o.z)],
+            [row(&d.x), row(&d.y), row(&d.z)],
+            lanes as i32,
+        )
+    }
+
     /// The packet of rays `o + t d` in rows, the lanes `active` (bits) looking: each lane's
     /// inverse direction is `safe_inverse`'s, operation for operation (a component below 1e-30
     /// in magnitude replaced by 1e-30 of its sign, then 1 / d).
@@ -580,12 +591,7 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> HitLanes {
-        let p = from_rows(
-            [row(&o.x), row(&o.y), row(&o.z)],
-            [row(&d.x), row(&d.y), row(&d.z)],
-            lanes as i32,
-        );
-        let (t, b1, b2, held) = closest_packet(scene, p);
+        let (t, b1, b2, held) = closest_packet(scene, from_lanes((o, d), lanes));
         let mut hits = HitLanes {
             t: F8::new(t),
             prim: held,
@@ -740,12 +746,7 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 {
-        let p = from_rows(
-            [row(&o.x), row(&o.y), row(&o.z)],
-            [row(&d.x), row(&d.y), row(&d.z)],
-            lanes as i32,
-        );
-        occluded_packet(scene, p) as u32
+        occluded_packet(scene, from_lanes((o, d), lanes)) as u32
     }
 
     /// The traversal of [`occluded`]: the blocked lanes' bits.
