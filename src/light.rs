@@ -99,7 +99,8 @@ pub struct LightLanes {
 /// [`sample_emitter`] in the lanes `lanes` (bits), lane l with the numbers (`u_select`,
 /// `u1`, `u2`) of its lane: the emitter chosen lane by lane, then the points on emitter
 /// triangles in SIMD lanes (`sample_uniform_triangle` and `triangle_point`, operation for
-/// operation), on spheres lane by lane. The other lanes hold no sample.
+/// operation), on spheres lane by lane. The other lanes hold no sample. The scene must have an
+/// emitter, as a validated scene has.
 #[inline]
 pub fn sample_emitter_lanes(
     scene: &FlatScene,

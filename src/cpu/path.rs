@@ -339,6 +339,16 @@ fn shade_diffuse_lanes(
     slot: &mut Slot,
     faults: Faults,
 ) -> LitLanes {
+    if lanes == 0 {
+        // No diffuse hit this round (and no emitter to choose from is needed).
+        return LitLanes {
+            origin: V8::default(),
+            to_light: V8::default(),
+            value: V8::default(),
+            clear: 0,
+            going_on: 0,
+        };
+    }
     let (p, p_err, n) = (&hits.p, &hits.p_err, &hits.n);
     let wo = slot.d.neg();
     let albedo = V8::gather_from(&scene.materials, U8::new(hits.material), 0);
