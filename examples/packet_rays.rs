@@ -8,7 +8,7 @@
 //! ```
 //!
 //! Default: the three reference scenes. The packets' closest-hit traversal pays on small trees
-//! and not on large ones, which is why `packet::intersect_closest_all` takes packets only up to
+//! and not on large ones, which is why `packet::intersect_closest_lanes` takes packets only up to
 //! `PACKET_CLOSEST_MAX_NODES` four-wide nodes (the tessellated rooms and the bunny of
 //! `scenes/perf/` show the other side).
 

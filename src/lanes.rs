@@ -297,6 +297,16 @@ pub fn triangle_hit_point(p0: &V8, p1: &V8, p2: &V8, n: &V8, b1: F8, b2: F8) -> 
     (p, p_err, inside | !two_area.simd_gt(f32x8::ZERO))
 }
 
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline]
+pub fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let l = bits.trailing_zeros() as usize;
+        bits &= bits.wrapping_sub(1);
+        (l < LANES).then_some(l)
+    })
+}
+
 /// The float mask (all bits set, or none) of the lanes whose bits are set in `bits`.
 #[inline(always)]
 pub fn mask(bits: u32) -> F8 {

@@ -25,7 +25,7 @@
 use crate::bvh::{intersect_closest, occluded};
 use crate::flat::FlatScene;
 use crate::geometry::{Ray, SurfaceHit};
-use crate::lanes::{F8, V8};
+use crate::lanes::{lanes_of, F8, V8};
 
 /// The most rays a packet holds.
 pub const PACKET: usize = 8;
@@ -39,31 +39,19 @@ pub const PACKET: usize = 8;
 pub const PACKET_CLOSEST_MAX_NODES: usize = 64;
 
 /// The nearest hit of each ray (`t` in (its error bound, f32::MAX)), as
-/// [`intersect_closest`] finds it, for any number of rays: in packets of eight where the tree
-/// is small ([`PACKET_CLOSEST_MAX_NODES`]), one by one elsewhere.
-pub fn intersect_closest_all(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
-    let packets = scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES;
-    closest(scene, rays, hits, packets);
-}
-
-/// [`intersect_closest_all`] in packets of eight whatever the tree.
+/// [`intersect_closest`] finds it, for any number of rays, in packets of eight whatever the
+/// tree where the CPU has AVX, else one by one (the path tracer's slots take packets only on
+/// small trees: [`intersect_closest_lanes`]).
 pub fn intersect_closest_packets(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
-    closest(scene, rays, hits, true);
-}
-
-/// The nearest hits, in packets where `packets` holds and the CPU has AVX, else one by one.
-fn closest(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>], packets: bool) {
     assert_eq!(rays.len(), hits.len());
     #[cfg(target_arch = "x86_64")]
-    if packets && std::arch::is_x86_feature_detected!("avx") {
+    if std::arch::is_x86_feature_detected!("avx") {
         for (r, h) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
             // SAFETY: the CPU has AVX (checked above).
             unsafe { avx::closest(scene, r, h) };
         }
         return;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = packets;
     for (r, h) in rays.iter().zip(hits.iter_mut()) {
         *h = intersect_closest(scene, r, f32::MAX);
     }
@@ -143,16 +131,19 @@ pub fn intersect_closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32
         return unsafe { avx::closest_lanes(scene, (o, d), lanes) };
     }
     let mut hits = HitLanes::default();
-    for l in 0..PACKET {
-        if lanes & (1 << l) != 0 {
-            let ray = Ray {
-                o: o.lane(l),
-                d: d.lane(l),
-            };
-            hits.set(l, intersect_closest(scene, &ray, f32::MAX));
-        }
+    for l in lanes_of(lanes) {
+        hits.set(l, intersect_closest(scene, &ray_of((o, d), l), f32::MAX));
     }
     hits
+}
+
+/// Lane `l`'s ray of eight rays in rows.
+#[inline]
+fn ray_of((o, d): (&V8, &V8), l: usize) -> Ray {
+    Ray {
+        o: o.lane(l),
+        d: d.lane(l),
+    }
 }
 
 /// Of eight shadow segments given as rows (`o + t d`, t in (0, 1)), those in `lanes` (bits)
@@ -164,18 +155,18 @@ pub fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 
         // SAFETY: the CPU has AVX (checked above).
         return unsafe { avx::occluded_lanes(scene, (o, d), lanes) };
     }
-    let (o, d) = (o.lanes(), d.lanes());
-    (0..PACKET)
-        .filter(|&l| lanes & (1 << l) != 0 && occluded(scene, &Ray { o: o[l], d: d[l] }, 1.0))
+    lanes_of(lanes)
+        .filter(|&l| occluded(scene, &ray_of((o, d), l), 1.0))
         .fold(0, |bits, l| bits | 1 << l)
 }
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use super::HitLanes;
+    use super::{ray_of, HitLanes};
     use crate::bvh::{surface_hit, Candidate, WIDE_STACK_SIZE};
     use crate::flat::{FlatScene, Sphere, EMPTY_SLOT, PRIM_SPHERE_BIT};
     use crate::geometry::{gamma, Ray, SurfaceHit};
+    use crate::lanes::lanes_of;
     use crate::lanes::{F8, V8};
     use std::arch::x86_64::*;
 
@@ -236,11 +227,10 @@ mod avx {
     #[inline]
     #[target_feature(enable = "avx")]
     fn from_rows(o: [__m256; 3], d: [__m256; 3], active: i32) -> Packet {
-        let tiny = _mm256_set1_ps(1e-30);
         let inv_d = d.map(|x| {
-            let is_tiny = _mm256_cmp_ps::<_CMP_LT_OS>(abs(x), tiny);
-            let signed = _mm256_or_ps(_mm256_and_ps(x, _mm256_set1_ps(-0.0)), tiny);
-            _mm256_div_ps(_mm256_set1_ps(1.0), _mm256_blendv_ps(x, signed, is_tiny))
+            let is_tiny = _mm256_cmp_ps::<_CMP_LT_OS>(abs(x), _mm256_set1_ps(1e-30));
+            let nudged = _mm256_blendv_ps(x, with_sign_of(1e-30, x), is_tiny);
+            _mm256_div_ps(_mm256_set1_ps(1.0), nudged)
         });
         Packet {
             o,
@@ -289,11 +279,22 @@ mod avx {
         _mm256_andnot_ps(_mm256_set1_ps(-0.0), x)
     }
 
+    /// copysign(magnitude, x) in every lane, for a non-negative `magnitude`: it with x's sign
+    /// bit.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn with_sign_of(magnitude: f32, x: __m256) -> __m256 {
+        _mm256_or_ps(
+            _mm256_and_ps(x, _mm256_set1_ps(-0.0)),
+            _mm256_set1_ps(magnitude),
+        )
+    }
+
     /// copysign(1, x) in every lane: 1 with x's sign bit.
     #[inline]
     #[target_feature(enable = "avx")]
     fn sign_one(x: __m256) -> __m256 {
-        _mm256_or_ps(_mm256_and_ps(x, _mm256_set1_ps(-0.0)), _mm256_set1_ps(1.0))
+        with_sign_of(1.0, x)
     }
 
     /// One triangle against every lane's ray: `intersect_triangle`'s Möller–Trumbore with the
@@ -629,20 +630,14 @@ mod avx {
             }
             others |= triangles & !kept.to_bitmask();
         }
-        while others != 0 {
-            let l = others.trailing_zeros() as usize;
-            others &= others - 1;
+        for l in lanes_of(others) {
             let c = Candidate {
                 t: t[l],
                 prim: held[l],
                 b1: b1[l],
                 b2: b2[l],
             };
-            let ray = Ray {
-                o: o.lane(l),
-                d: d.lane(l),
-            };
-            hits.set(l, Some(surface_hit(scene, &ray, c)));
+            hits.set(l, Some(surface_hit(scene, &ray_of((o, d), l), c)));
         }
         hits
     }

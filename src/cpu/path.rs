@@ -23,7 +23,7 @@ use crate::camera::Camera;
 use crate::film::PixelStats;
 use crate::flat::{FlatScene, KIND_DIFFUSE, KIND_EMITTER};
 use crate::geometry::{offset_ray_origin, Ray, SurfaceHit};
-use crate::lanes::{self, F8, LANES, U8, V8};
+use crate::lanes::{self, lanes_of, F8, LANES, U8, V8};
 use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter, sample_emitter_lanes};
 use crate::packet::{intersect_closest_lanes, occluded_all, occluded_lanes, HitLanes};
 use crate::sampling::{
@@ -253,16 +253,6 @@ pub fn trace_pixels(
     }
 }
 
-/// The bits of `bits`, lowest first, as lane numbers.
-#[inline]
-fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        let l = bits.trailing_zeros() as usize;
-        bits &= bits.wrapping_sub(1);
-        (l < LANES).then_some(l)
-    })
-}
-
 /// Eight camera samples' paths in SIMD lanes, each of [`PathState`]'s fields a row of eight
 /// (structure of arrays): lane l is the path of sample `sample[l]` of the tile's pixel
 /// `pixel[l]` (whose stream is `stream[l]`), in flight where `live` has bit l.
@@ -340,7 +330,7 @@ fn shade_diffuse_lanes(
     faults: Faults,
 ) -> LitLanes {
     if lanes == 0 {
-        // No diffuse hit this round (and no emitter to choose from is needed).
+        // No diffuse hit this round: nothing to shade (and no emitter row is read).
         return LitLanes {
             origin: V8::default(),
             to_light: V8::default(),
