@@ -3,7 +3,7 @@
 //! writes the JSON report (`out/bench.json`). Warm-up (kernel compilation, first pass) is
 //! timed apart and not part of the rates.
 
-use hexray::bench::{run, table, Config, Which};
+use hexray::analysis::bench::{run, table, Config, Which};
 use std::path::PathBuf;
 
 fn main() {
@@ -29,7 +29,7 @@ fn main() {
         height: 256,
         spp: 64,
         seed: 1,
-        methods: vec![hexray::method::Method::Path],
+        methods: vec![hexray::transport::method::Method::Path],
         light_samples: 1,
         threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
     };

@@ -20,11 +20,12 @@
 //!   needs for its shadow ray. This is an upper bound: inside one traversal the lanes diverge
 //!   further (a leaf here, a node there), which the per-ray totals do not see.
 
-use hexray::bvh::counters::{self, Work};
-use hexray::camera::Camera;
-use hexray::cpu::{trace_path, Faults};
-use hexray::flat::FlatScene;
-use hexray::sampling::Sampler;
+use hexray::accel::bvh::counters::{self, Work};
+use hexray::cpu::trace_path;
+use hexray::layout::FlatScene;
+use hexray::math::sampling::Sampler;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
 
 mod common;
 
@@ -64,7 +65,7 @@ fn main() {
         let scene = common::load(path);
         let mut flat = FlatScene::build(&scene);
         // The shader traverses the four-wide tree: count its nodes, not the CPU's wide ones.
-        flat.wide = hexray::wide_bvh::one_for_one(&flat.nodes);
+        flat.wide = hexray::accel::wide_bvh::one_for_one(&flat.nodes);
         let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
         // Every pixel's paths, bounce by bounce, sample after sample.
         let paths: Vec<Vec<Vec<(u32, u32)>>> = (0..SIZE * SIZE)

@@ -12,13 +12,13 @@
 //! `PACKET_CLOSEST_MAX_NODES` four-wide nodes (the tessellated rooms and the bunny of
 //! `scenes/perf/` show the other side).
 
-use hexray::bvh::{intersect_closest, occluded};
-use hexray::camera::Camera;
-use hexray::flat::FlatScene;
-use hexray::geometry::{offset_ray_origin, Ray};
-use hexray::light::sample_emitter;
-use hexray::packet::{intersect_closest_packets, occluded_all};
-use hexray::sampling::{orthonormal_basis, pcg4d, sample_cosine_hemisphere, u32_to_unit_f32};
+use hexray::accel::bvh::{intersect_closest, occluded};
+use hexray::accel::packet::{intersect_closest_packets, occluded_all};
+use hexray::layout::FlatScene;
+use hexray::math::geometry::{offset_ray_origin, Ray};
+use hexray::math::sampling::{orthonormal_basis, pcg4d, sample_cosine_hemisphere, u32_to_unit_f32};
+use hexray::transport::camera::Camera;
+use hexray::transport::light::sample_emitter;
 use std::time::Instant;
 
 mod common;

@@ -17,9 +17,9 @@
 use crate::common::reference::{compare, film_mean_z, means_agree, read};
 use crate::common::*;
 use crate::independent_renderer::compare_with_mitsuba;
-use hexray::cpu::Faults;
-use hexray::method::Method;
-use hexray::stats::MeanImage;
+use hexray::analysis::stats::MeanImage;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const TNCG15_REFERENCE: &str = "tests/data/references/stability/tiny_light_1e0_32.exr";
 const GLASS_REFERENCE: &str = "tests/data/references/stability/glass_room_32.exr";

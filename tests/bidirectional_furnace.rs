@@ -10,9 +10,9 @@
 //! could not hide. Planted: a depth cap of 8 (BDPT, both backends) and a 3 % dim mirror.
 
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::method::Method;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const SIZE: u32 = 32;
 /// Iterations: each gives every pixel one sample.

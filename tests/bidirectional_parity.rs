@@ -9,9 +9,9 @@
 
 use crate::common::parity::{gpu_against_cpu_iterations, Parity};
 use crate::common::*;
-use hexray::cpu::Faults;
-use hexray::merging::MergeRadius;
-use hexray::method::Method;
+use hexray::transport::faults::Faults;
+use hexray::transport::merging::MergeRadius;
+use hexray::transport::method::Method;
 
 const SIZE: u32 = 64;
 

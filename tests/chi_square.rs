@@ -7,13 +7,13 @@
 //! last two tests plant such a disagreement and show it.
 
 use glam::Vec3;
-use hexray::bsdf::{sample_bsdf, Transport};
-use hexray::flat::{FlatScene, Material, KIND_DIFFUSE, PRIM_SPHERE_BIT};
-use hexray::geometry::{intersect_triangle, Ray};
-use hexray::light::sample_emitter;
-use hexray::sampling::Sampler;
+use hexray::analysis::stats::chi_square_test;
+use hexray::layout::{FlatScene, Material, KIND_DIFFUSE, PRIM_SPHERE_BIT};
+use hexray::math::geometry::{intersect_triangle, Ray};
+use hexray::math::sampling::Sampler;
 use hexray::scene::Scene;
-use hexray::stats::chi_square_test;
+use hexray::transport::bsdf::{sample_bsdf, Transport};
+use hexray::transport::light::sample_emitter;
 use std::f64::consts::PI;
 
 const THETA_BINS: usize = 80;
@@ -232,7 +232,7 @@ fn emitter_pdf(scene: &FlatScene, p: Vec3, pmf: &dyn Fn(usize) -> f32) -> impl F
             }
             let tri = &scene.triangles[e.prim as usize];
             if let Some(h) = intersect_triangle(&ray, tri) {
-                let n = hexray::geometry::triangle_normal(tri);
+                let n = hexray::math::geometry::triangle_normal(tri);
                 let cos = n.dot(w).abs() as f64;
                 pdf += pmfs[k] as f64 / e.area as f64 * (h.t as f64).powi(2) / cos;
             }

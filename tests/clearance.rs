@@ -1,12 +1,14 @@
-//! The clearance of a surface point (`hexray::clearance`), which bounds vcm's merge radius at a
+//! The clearance of a surface point (`hexray::transport::clearance`), which bounds vcm's merge radius at a
 //! camera vertex: the BVH query finds exactly what a brute-force scan over every primitive
 //! finds, and its nearest point on a triangle is the nearest.
 
 use crate::common::load;
 use glam::Vec3;
-use hexray::clearance::{clearance, closest_point_on_triangle, coplanar, COPLANAR_OFFSET};
-use hexray::flat::{FlatScene, Triangle, PRIM_SPHERE_BIT};
-use hexray::merging::scene_radius;
+use hexray::layout::{FlatScene, Triangle, PRIM_SPHERE_BIT};
+use hexray::transport::clearance::{
+    clearance, closest_point_on_triangle, coplanar, COPLANAR_OFFSET,
+};
+use hexray::transport::merging::scene_radius;
 
 /// A fixed stream of uniform numbers in [0, 1) (xorshift64*).
 struct Rng(u64);
@@ -164,12 +166,12 @@ const EDGE_RADIUS: f32 = 0.1;
 /// foot: where a disk of the full radius reaches across it.
 fn strip_pixels() -> Vec<usize> {
     let (scene, flat) = load(EDGE);
-    let camera = hexray::camera::Camera::new(&scene.desc.camera, 32, 32);
+    let camera = hexray::transport::camera::Camera::new(&scene.desc.camera, 32, 32);
     let mut strip = Vec::new();
     for y in 0..32 {
         for x in 0..32 {
             let ray = camera.ray(x, y, 0.5, 0.5);
-            if let Some(hit) = hexray::bvh::intersect_closest(&flat, &ray, f32::MAX) {
+            if let Some(hit) = hexray::accel::bvh::intersect_closest(&flat, &ray, f32::MAX) {
                 if hit.n.z.abs() > 0.5 && hit.p.x < 0.0 && hit.p.x > -EDGE_RADIUS {
                     strip.push((y * 32 + x) as usize);
                 }
@@ -191,9 +193,9 @@ fn strip_mean(film: &hexray::film::Film, strip: &[usize]) -> f64 {
 /// z of vcm's mean over the strip against the path tracer's: vcm's standard error from the
 /// scatter of 64 independent iterations' strip means (its pixels share photons, so their
 /// variances do not add up), the path tracer's from its independent pixels' variances.
-fn edge_z(faults: hexray::cpu::Faults) -> f64 {
-    use hexray::merging::MergeRadius;
-    use hexray::method::Method;
+fn edge_z(faults: hexray::transport::faults::Faults) -> f64 {
+    use hexray::transport::merging::MergeRadius;
+    use hexray::transport::method::Method;
     let strip = strip_pixels();
     let radius = MergeRadius {
         initial: EDGE_RADIUS,
@@ -205,7 +207,14 @@ fn edge_z(faults: hexray::cpu::Faults) -> f64 {
     let k = means.len() as f64;
     let vcm = means.iter().sum::<f64>() / k;
     let var_vcm = means.iter().map(|m| (m - vcm).powi(2)).sum::<f64>() / (k - 1.0) / k;
-    let path = crate::common::render_cpu(EDGE, 32, 32, 1024, 6, hexray::cpu::Faults::NONE);
+    let path = crate::common::render_cpu(
+        EDGE,
+        32,
+        32,
+        1024,
+        6,
+        hexray::transport::faults::Faults::NONE,
+    );
     let path_mean = strip_mean(&path, &strip);
     let var_path = strip
         .iter()
@@ -230,7 +239,7 @@ fn edge_z(faults: hexray::cpu::Faults) -> f64 {
 /// strip is too narrow to show.)
 #[test]
 fn vcm_merges_no_darkness_from_across_an_edge() {
-    let z = edge_z(hexray::cpu::Faults::NONE);
+    let z = edge_z(hexray::transport::faults::Faults::NONE);
     assert!(z.abs() < 4.0, "z = {z:.2}");
 }
 
@@ -240,9 +249,9 @@ fn vcm_merges_no_darkness_from_across_an_edge() {
 /// clearance (96 strip pixels).
 #[test]
 fn the_edge_check_rejects_merges_that_ignore_the_clearance() {
-    let z = edge_z(hexray::cpu::Faults {
+    let z = edge_z(hexray::transport::faults::Faults {
         merge_ignores_clearance: true,
-        ..hexray::cpu::Faults::NONE
+        ..hexray::transport::faults::Faults::NONE
     });
     assert!(z < -4.0, "z = {z:.2}");
 }

@@ -3,7 +3,7 @@
 //! both end the render with the samples taken so far written out.
 
 use crate::common::repo;
-use hexray::output::read_exr;
+use hexray::film::output::read_exr;
 use std::path::PathBuf;
 use std::process::Command;
 

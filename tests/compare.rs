@@ -2,8 +2,8 @@
 //! .npy and EXR alike, and refuses images of different sizes.
 
 use crate::common::repo;
-use hexray::compare::{compare, read_image, RELMSE_EPSILON};
-use hexray::output::{write_exr, Metadata, RgbImage};
+use hexray::analysis::compare::{compare, read_image, RELMSE_EPSILON};
+use hexray::film::output::{write_exr, Metadata, RgbImage};
 use npyz::WriterBuilder;
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! (issue 16): a header that claims more pixels than its file holds is refused before any
 //! allocation, and merge refuses, by file and pixel, what would poison its sums silently.
 
-use hexray::output::{read_exr, write_exr, RgbImage};
+use hexray::film::output::{read_exr, write_exr, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -55,7 +55,7 @@ fn part(dir: &Path, name: &str, seed: u32) -> PathBuf {
 }
 
 /// Rewrites an EXR's pixels or metadata, as a damaged or crafted file would have them.
-fn rewrite(path: &Path, edit: impl FnOnce(&mut RgbImage, &mut hexray::output::Metadata)) {
+fn rewrite(path: &Path, edit: impl FnOnce(&mut RgbImage, &mut hexray::film::output::Metadata)) {
     let (mut image, mut meta) = read_exr(path).unwrap();
     edit(&mut image, &mut meta);
     write_exr(path, &image, &meta).unwrap();

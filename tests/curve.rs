@@ -7,7 +7,7 @@
 //! renderer that ignored new samples, or a curve measured against the wrong reference).
 
 use crate::common::repo;
-use hexray::curve::spearman;
+use hexray::analysis::curve::spearman;
 use std::process::Command;
 
 #[test]

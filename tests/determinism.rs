@@ -4,9 +4,9 @@
 //! seed gives another image.
 
 use crate::common::*;
-use hexray::camera::Camera;
 use hexray::film::Film;
 use hexray::render::{Backend, CpuBackend};
+use hexray::transport::camera::Camera;
 
 fn render(threads: usize, seed: u32, passes: &[u32]) -> Film {
     let (scene, flat) = load("scenes/glass_room.json");

@@ -11,8 +11,8 @@
 //! Statistic: |image mean − L| ≤ 4 s.e. per channel.
 
 use crate::common::*;
-use hexray::cpu::Faults;
-use hexray::method::Method;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 use std::f64::consts::PI;
 
 fn corner_form_factor(x: f64, y: f64) -> f64 {

@@ -7,7 +7,7 @@
 //! s.e. is below 0.5 %, so that a 2 % error could not hide in the noise.
 
 use crate::common::*;
-use hexray::cpu::Faults;
+use hexray::transport::faults::Faults;
 
 const SIZE: u32 = 32;
 const SPP: u32 = 256;

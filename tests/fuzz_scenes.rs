@@ -13,7 +13,7 @@
 //! `mesh::parse` (`fuzz_meshes_*`).
 
 use crate::common::repo;
-use hexray::flat::FlatScene;
+use hexray::layout::FlatScene;
 use hexray::scene::{mesh, MeshDesc, Scene, SceneError};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, RngSeed, TestCaseError, TestRunner};

@@ -3,10 +3,10 @@
 //! methods that splat refuse such an image plainly before any work.
 
 use crate::common::{empty_temp_dir, gpu, gpu_renderer, hexray_command, load};
-use hexray::cpu::Faults;
+use hexray::film::output::read_exr;
 use hexray::film::Film;
-use hexray::method::Method;
-use hexray::output::read_exr;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 /// The band tests' image: 24x19 (the height a multiple neither of 5 nor of the 8-row
 /// workgroup), 3 samples, tncg15_room, seed 7.
@@ -99,7 +99,7 @@ fn splatting_methods_in_film_bands_equal_one_band() {
 
 /// `hexray render` of cornell_box on the GPU at one sample per pixel, from the command line;
 /// the image read back, after checking its size and sample count.
-fn render_one_spp(method: &str, width: usize, height: usize) -> hexray::output::RgbImage {
+fn render_one_spp(method: &str, width: usize, height: usize) -> hexray::film::output::RgbImage {
     let dir = empty_temp_dir(&format!("gpu-bands-{method}"));
     let exr = dir.join("big.exr");
     let o = hexray_command()
@@ -129,7 +129,7 @@ fn render_one_spp(method: &str, width: usize, height: usize) -> hexray::output::
 }
 
 /// The mean of rows `y0..y1` of an image (the sum of its channels).
-fn rows_mean(image: &hexray::output::RgbImage, y0: usize, y1: usize) -> f32 {
+fn rows_mean(image: &hexray::film::output::RgbImage, y0: usize, y1: usize) -> f32 {
     let rows = &image.pixels[y0 * image.width..y1 * image.width];
     rows.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / rows.len() as f32
 }

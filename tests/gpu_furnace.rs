@@ -3,7 +3,7 @@
 //! statistic is the same: |image mean − 1| ≤ 4 s.e. per channel, with the s.e. below 0.5 %.
 
 use crate::common::*;
-use hexray::cpu::Faults;
+use hexray::transport::faults::Faults;
 
 const SIZE: u32 = 32;
 const SPP: u32 = 128;

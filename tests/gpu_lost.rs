@@ -3,11 +3,12 @@
 //! corrupting it. The loss is provoked with `Device::destroy` on a device of the test's own.
 
 use crate::common::{gpu, load};
-use hexray::camera::Camera;
-use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::gpu::{Checks, GpuBackend, GpuRenderer, Residency};
+use hexray::gpu::{Checks, GpuRenderer, Residency};
+use hexray::render::GpuBackend;
 use hexray::render::{render_progressive, Backend, Budget, StopReason};
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
 use std::sync::atomic::AtomicBool;
 
 /// Destroys the device after its first pass.
@@ -50,7 +51,8 @@ fn a_lost_device_keeps_the_samples_taken_before() {
         Faults::NONE,
         Checks::Unchecked,
         Residency::Storage,
-        hexray::method::Method::Path,
+        hexray::transport::method::Method::Path,
+        0.0,
     )
     .unwrap();
     let mut backend = Fragile {

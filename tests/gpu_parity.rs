@@ -10,8 +10,8 @@
 //! light), not for 3 % ones.
 
 use crate::common::*;
-use hexray::cpu::Faults;
-use hexray::stats::{welch_blocks, MeanImage};
+use hexray::analysis::stats::{welch_blocks, MeanImage};
+use hexray::transport::faults::Faults;
 
 const SIZE: u32 = 64;
 

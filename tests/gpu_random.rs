@@ -4,7 +4,7 @@
 
 use crate::common::gpu;
 use hexray::gpu::shader::validate;
-use hexray::sampling::Sampler;
+use hexray::math::sampling::Sampler;
 use wgpu::util::DeviceExt;
 
 const PROBE: &str = r#"

@@ -16,9 +16,9 @@
 //! pixels as at 256x256 (1024 hexray samples per block in both tests).
 
 use crate::common::*;
-use hexray::cpu::Faults;
-use hexray::output::read_npy_rgb;
-use hexray::stats::{z_scores, MeanImage};
+use hexray::analysis::stats::{z_scores, MeanImage};
+use hexray::film::output::read_npy_rgb;
+use hexray::transport::faults::Faults;
 
 fn mitsuba() -> MeanImage {
     let mean = read_npy_rgb(&repo("tests/data/references/cornell_box_256.npy")).unwrap();

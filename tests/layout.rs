@@ -2,12 +2,12 @@
 //! WGSL; this test compares every shared struct's size, field names and field offsets with
 //! naga's reflection of the WGSL declarations, so the two cannot drift apart.
 
-use hexray::camera::Camera;
-use hexray::flat::{BvhNode, Emitter, Material, PlanarMirror, Sphere, Triangle};
-use hexray::gpu::render::{Frame, PixelSums};
+use hexray::accel::hash_grid::GridParams;
+use hexray::gpu::frame::{Frame, PixelSums};
 use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
-use hexray::hash_grid::GridParams;
-use hexray::subpath::LightVertex;
+use hexray::layout::{BvhNode, Emitter, Material, PlanarMirror, Sphere, Triangle};
+use hexray::transport::camera::Camera;
+use hexray::transport::subpath::LightVertex;
 use std::mem::{offset_of, size_of};
 
 macro_rules! rust_layout {
@@ -215,17 +215,17 @@ macro_rules! rust_constants {
 
 /// The constants that the WGSL declares again, with their Rust values (each exact in f64).
 fn shared_constants() -> Vec<(&'static str, f64)> {
-    use hexray::clearance::{COPLANAR_COS, COPLANAR_OFFSET};
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
-    use hexray::flat::{
+    use hexray::gpu::bidirectional::SCAN_BLOCK;
+    use hexray::layout::{
         EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
         PRIM_PADDING, PRIM_SPHERE_BIT,
     };
-    use hexray::gpu::bidirectional::SCAN_BLOCK;
-    use hexray::planar_mirror::{BOUNDS_SLACK, MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
-    use hexray::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
-    use hexray::splat::FRACTION_BITS;
-    use hexray::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
+    use hexray::math::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
+    use hexray::transport::clearance::{COPLANAR_COS, COPLANAR_OFFSET};
+    use hexray::transport::planar_mirror::{BOUNDS_SLACK, MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
+    use hexray::transport::splat::FRACTION_BITS;
+    use hexray::transport::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
     rust_constants!(
         RR_START_BOUNCE,
         RR_MAX_SURVIVAL,
@@ -277,7 +277,7 @@ fn shared_constants_match_their_wgsl_declarations() {
 #[test]
 fn a_drifted_constant_is_caught() {
     let wgsl = source(Residency::Storage, ArrayLengths::default());
-    let start = hexray::subpath::LIGHT_SUBPATH_RR_START_BOUNCE;
+    let start = hexray::transport::subpath::LIGHT_SUBPATH_RR_START_BOUNCE;
     let declared = format!("const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = {start}u;");
     assert!(wgsl.contains(&declared));
     let drifted = wgsl.replace(

@@ -4,9 +4,9 @@
 //! and the NEE sum is divided by N; getting either wrong biases the image.
 
 use crate::common::*;
-use hexray::cpu::Faults;
+use hexray::analysis::stats::{welch_blocks, MeanImage};
 use hexray::film::Film;
-use hexray::stats::{welch_blocks, MeanImage};
+use hexray::transport::faults::Faults;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::f64::consts::PI;
 
@@ -112,9 +112,9 @@ fn gpu_matches_cpu_with_three_shadow_rays() {
 /// dimension blocks of their own).
 #[test]
 fn one_shadow_ray_draws_no_extra_numbers() {
-    use hexray::sampling::{dim_bsdf, dim_light, dim_light_extra};
+    use hexray::math::sampling::{dim_bsdf, dim_light, dim_light_extra};
     for bounce in 0..1000 {
-        for j in 1..hexray::sampling::MAX_LIGHT_SAMPLES {
+        for j in 1..hexray::math::sampling::MAX_LIGHT_SAMPLES {
             let d = dim_light_extra(bounce, j);
             for k in 0..4000 {
                 assert!(d != dim_light(k) && d != dim_bsdf(k) && d != 0);

@@ -14,9 +14,9 @@
 
 use crate::common::parity::parity;
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::method::Method;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const SCENE: &str = "scenes/cornell_box.json";
 const SIZE: u32 = 64;

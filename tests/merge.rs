@@ -4,8 +4,8 @@
 //! script gives what the CLI gives by hand.
 
 use crate::common::repo;
-use hexray::output::{read_exr, Metadata, RgbImage};
-use hexray::stats::{student_t_two_sided_p, welch_blocks, MeanImage};
+use hexray::analysis::stats::{student_t_two_sided_p, welch_blocks, MeanImage};
+use hexray::film::output::{read_exr, Metadata, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -62,7 +62,7 @@ fn merge(parts: &[PathBuf], out: &Path) -> std::process::Output {
 /// The mean EXR, its variance EXR and the metadata, as the statistics want them.
 fn load(path: &Path) -> (MeanImage, Metadata) {
     let (mean, meta) = read_exr(path).unwrap();
-    let (var, _) = read_exr(&hexray::merge::variance_path(path)).unwrap();
+    let (var, _) = read_exr(&hexray::film::parts::variance_path(path)).unwrap();
     let spp: f64 = meta.get("spp").unwrap().parse().unwrap();
     (mean_image(&mean, &var, spp), meta)
 }

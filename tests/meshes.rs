@@ -5,11 +5,11 @@
 //! every triangle finds; and the GPU renders the bunny room as the CPU does.
 
 use crate::common::*;
-use hexray::bvh;
-use hexray::cpu::Faults;
-use hexray::flat::{FlatScene, Triangle};
-use hexray::geometry::{intersect_triangle, Ray};
+use hexray::accel::bvh;
+use hexray::layout::{FlatScene, Triangle};
+use hexray::math::geometry::{intersect_triangle, Ray};
 use hexray::scene::Scene;
+use hexray::transport::faults::Faults;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -783,7 +783,7 @@ fn the_gpu_renders_the_bunny_room_as_the_cpu_does() {
 
 #[test]
 fn a_scene_array_beyond_the_gpu_binding_limit_is_refused_in_a_sentence() {
-    use hexray::gpu::render::check_scene_fits;
+    use hexray::gpu::limits::check_scene_fits;
     use hexray::gpu::Residency;
     let (_, flat) = load("scenes/bunny_room.json");
     // bunny_room's 3700 triangles are 0.23 MiB: over a 128 KiB storage binding, under 128 MiB.

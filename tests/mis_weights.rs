@@ -30,16 +30,16 @@
 
 use crate::common::*;
 use glam::Vec3;
-use hexray::bsdf::{sample_bsdf, Transport};
-use hexray::bvh::intersect_closest;
-use hexray::camera::Camera;
+use hexray::accel::bvh::intersect_closest;
 use hexray::cpu::light_path::is_diffuse;
-use hexray::flat::{FlatScene, KIND_EMITTER};
-use hexray::geometry::{offset_ray_origin, Ray};
-use hexray::light::emitter_pdf_area;
-use hexray::method::Method;
-use hexray::sampling::Sampler;
-use hexray::subpath::{
+use hexray::layout::{FlatScene, KIND_EMITTER};
+use hexray::math::geometry::{offset_ray_origin, Ray};
+use hexray::math::sampling::Sampler;
+use hexray::transport::bsdf::{sample_bsdf, Transport};
+use hexray::transport::camera::Camera;
+use hexray::transport::light::emitter_pdf_area;
+use hexray::transport::method::Method;
+use hexray::transport::subpath::{
     camera_subpaths, specular_camera_subpaths, specular_pixels, weight_connection, weight_emission,
     weight_light_point_to_camera, weight_merge, weight_next_event, weight_to_camera, MergeMis,
     SubpathMis,
@@ -331,7 +331,7 @@ fn sums_of(
     weights_of: Method,
 ) -> (usize, usize, bool, f32) {
     let merge = MergeMis::new(
-        radius * hexray::merging::scene_radius(&load(rel).1),
+        radius * hexray::transport::merging::scene_radius(&load(rel).1),
         SIZE * SIZE,
         weights_of,
     );

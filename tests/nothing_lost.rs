@@ -4,7 +4,7 @@
 //! survive a kill without warning.
 
 use crate::common::repo;
-use hexray::output::read_exr;
+use hexray::film::output::read_exr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;

@@ -7,13 +7,13 @@ use crate::common::parity::{gpu_against_cpu_iterations, Parity};
 use crate::common::reference;
 use crate::common::*;
 use glam::Vec3;
-use hexray::cpu::Faults;
+use hexray::accel::hash_grid::{entry_index, HashGrid};
+use hexray::analysis::stats::MeanImage;
 use hexray::film::Film;
-use hexray::hash_grid::{entry_index, HashGrid};
-use hexray::merging::{MergeRadius, DEFAULT_RADIUS_FACTOR};
-use hexray::method::Method;
-use hexray::sampling::Sampler;
-use hexray::stats::MeanImage;
+use hexray::math::sampling::Sampler;
+use hexray::transport::faults::Faults;
+use hexray::transport::merging::{MergeRadius, DEFAULT_RADIUS_FACTOR};
+use hexray::transport::method::Method;
 
 /// Random points: clustered on a few planes (as light vertices on walls are) and scattered.
 fn points(n: u32, seed: u32) -> Vec<Vec3> {
@@ -77,7 +77,7 @@ fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
     let (scene, flat) = load("scenes/tncg15_room.json");
     let mut renderer = gpu_renderer(gpu, &scene, &flat, 64, 64, 1, Method::Sppm, Faults::NONE);
     let queries = points(4096, 2);
-    let min = hexray::merging::scene_bounds(&flat).0;
+    let min = hexray::transport::merging::scene_bounds(&flat).0;
     let mut total = 0;
     for (n, r) in [300, 20_000]
         .into_iter()

@@ -9,10 +9,11 @@
 //! less). The naive sum's error is printed for docs/gpu.md, not asserted.
 
 use crate::common::load;
-use hexray::camera::Camera;
-use hexray::cpu::{trace_path, Faults};
-use hexray::gpu::render::MAX_PASS_SPP;
-use hexray::sampling::Sampler;
+use hexray::cpu::trace_path;
+use hexray::gpu::frame::MAX_PASS_SPP;
+use hexray::math::sampling::Sampler;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
 
 #[test]
 fn pass_sums_folded_into_f64_keep_the_mean_to_1e_6_at_10_5_spp() {

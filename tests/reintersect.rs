@@ -7,12 +7,12 @@
 //! Exact counts, no statistics: a single self-hit fails.
 
 use glam::{DVec3, Vec3};
-use hexray::flat::{Sphere, Triangle};
-use hexray::geometry::{
+use hexray::layout::{Sphere, Triangle};
+use hexray::math::geometry::{
     intersect_sphere, intersect_triangle, offset_ray_origin, sphere_point, triangle_normal,
     triangle_point, Ray,
 };
-use hexray::sampling::Sampler;
+use hexray::math::sampling::Sampler;
 
 /// A coordinate of random sign and magnitude 10^[-2, 5): mixes tiny and huge values, as pbrt's
 /// test does, so that the error bounds are exercised at every scale.

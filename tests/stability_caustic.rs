@@ -15,7 +15,7 @@
 
 use crate::common::reference::{film_mean_z, means_agree};
 use crate::common::*;
-use hexray::cpu::Faults;
+use hexray::transport::faults::Faults;
 
 const SCENE: &str = "scenes/stability/caustic.json";
 const REFERENCE: &str = "tests/data/references/stability/caustic_32.exr";

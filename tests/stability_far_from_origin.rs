@@ -47,14 +47,16 @@
 use crate::common::parity::{parity, render_cpu_shared, Parity};
 use crate::common::*;
 use glam::Vec3;
-use hexray::bsdf::{sample_bsdf, Transport};
-use hexray::bvh::intersect_closest;
-use hexray::camera::Camera;
-use hexray::cpu::Faults;
-use hexray::flat::{KIND_DIFFUSE, KIND_EMITTER, PRIM_SPHERE_BIT};
-use hexray::geometry::{intersect_sphere, intersect_triangle, offset_ray_origin, Ray, SurfaceHit};
-use hexray::light::sample_emitter;
-use hexray::sampling::{dim_bsdf, dim_light, Sampler, DIM_CAMERA};
+use hexray::accel::bvh::intersect_closest;
+use hexray::layout::{KIND_DIFFUSE, KIND_EMITTER, PRIM_SPHERE_BIT};
+use hexray::math::geometry::{
+    intersect_sphere, intersect_triangle, offset_ray_origin, Ray, SurfaceHit,
+};
+use hexray::math::sampling::{dim_bsdf, dim_light, Sampler, DIM_CAMERA};
+use hexray::transport::bsdf::{sample_bsdf, Transport};
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
+use hexray::transport::light::sample_emitter;
 use rayon::prelude::*;
 
 pub const ROOM: &str = "scenes/tncg15_room.json";
@@ -184,7 +186,7 @@ fn cpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
         SIZE,
         512,
         seed + 200,
-        hexray::method::Method::Bdpt,
+        hexray::transport::method::Method::Bdpt,
         Faults::NONE,
     );
     let p = parity(&room_reference(), &moved);
@@ -203,7 +205,7 @@ fn gpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
         SIZE,
         128,
         seed + 300,
-        hexray::method::Method::Bdpt,
+        hexray::transport::method::Method::Bdpt,
         Faults::NONE,
     );
     let p = parity(&room_reference(), &moved);
@@ -273,7 +275,7 @@ fn where_f32_ends_1e6_and_1e7_are_rejected() {
 #[test]
 #[ignore]
 fn paired_bias_far_from_origin() {
-    use hexray::flat::FlatScene;
+    use hexray::layout::FlatScene;
     let (room, room_flat) = load(ROOM);
     let rounded = |k: i32| {
         let t = 10f64.powi(k);

@@ -21,10 +21,10 @@
 //! property). Power: the plane with one of its two triangles removed lets the sky through.
 
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::method::Method;
 use hexray::scene::{MaterialDesc, Scene, SceneDesc};
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const SCENE: &str = "scenes/stability/grazing.json";
 const SIZE: u32 = 64;

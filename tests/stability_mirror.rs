@@ -35,9 +35,9 @@ use crate::common::*;
 use crate::stability_far_from_origin::{
     room_reference, DARK_MIRROR, DARK_MIRROR_SEED, GPU_SPP, POWERFUL_SPP, ROOM, ROOM_SEED, SIZE,
 };
-use hexray::cpu::Faults;
-use hexray::method::Method;
 use hexray::scene::SceneDesc;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 use std::collections::HashMap;
 
 const DOUBLED: &str = "scenes/stability/tncg15_mirror_doubled.json";

@@ -23,8 +23,8 @@
 //! crossings, so a sample is at most 0.95^-46 ≈ 11 and the block means are close to normal.
 
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::scene::SceneDesc;
+use hexray::transport::faults::Faults;
 
 const SCENE: &str = "scenes/stability/mirror_corridor.json";
 const SIZE: u32 = 64;
@@ -319,7 +319,7 @@ fn mirror_corridor_unfolding_matches_tracing_in_f64() {
     let t = (scene.desc.camera.vfov_deg.to_radians() * 0.5).tan();
     let (mut lit, mut differ) = (0, 0);
     for i in 0..100_000u32 {
-        let u = hexray::sampling::Sampler::new(40, i, 0).draw4(0);
+        let u = hexray::math::sampling::Sampler::new(40, i, 0).draw4(0);
         let (a, b) = ((2.0 * u[0] as f64 - 1.0) * t, (2.0 * u[1] as f64 - 1.0) * t);
         let want = trace_f64(&scene.desc, a, b);
         lit += (want > 0.0) as u32;
@@ -394,7 +394,7 @@ fn bdpt_cpu(faults: Faults) -> TruthReport {
         SIZE,
         SPP,
         32,
-        hexray::method::Method::Bdpt,
+        hexray::transport::method::Method::Bdpt,
         faults,
     ))
 }
@@ -408,7 +408,7 @@ fn bdpt_gpu(faults: Faults) -> Option<TruthReport> {
         SIZE,
         SPP,
         33,
-        hexray::method::Method::Bdpt,
+        hexray::transport::method::Method::Bdpt,
         faults,
     )))
 }

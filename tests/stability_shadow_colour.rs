@@ -30,14 +30,15 @@
 
 use crate::common::*;
 use glam::{DVec3, Vec3};
-use hexray::bvh::intersect_closest;
-use hexray::camera::Camera;
-use hexray::cpu::{trace_path, Faults};
+use hexray::accel::bvh::intersect_closest;
+use hexray::analysis::stats::MeanImage;
+use hexray::cpu::trace_path;
 use hexray::film::{Film, PixelStats};
-use hexray::flat::FlatScene;
-use hexray::geometry::offset_ray_origin;
+use hexray::layout::FlatScene;
+use hexray::math::geometry::offset_ray_origin;
 use hexray::scene::{MaterialDesc, Scene};
-use hexray::stats::MeanImage;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -285,7 +286,7 @@ fn gather(scene: &Scene, flat: &FlatScene, mask: &[Option<usize>]) -> Film {
             };
             let mut rays = 0u64;
             for k in 0..GATHER {
-                let u = hexray::sampling::Sampler::new(41, pixel, k).draw4(0);
+                let u = hexray::math::sampling::Sampler::new(41, pixel, k).draw4(0);
                 let ray = camera.ray(pixel % SIZE, pixel / SIZE, u[0], u[1]);
                 let hit = intersect_closest(flat, &ray, f32::MAX).expect("an umbra pixel's ray");
                 assert_eq!(
@@ -313,7 +314,7 @@ fn gather(scene: &Scene, flat: &FlatScene, mask: &[Option<usize>]) -> Film {
                     .normalize()
                     .as_vec3();
                 let o = offset_ray_origin(hit.p, hit.p_err, hit.n, w);
-                let sampler = hexray::sampling::Sampler::new(42, pixel, k);
+                let sampler = hexray::math::sampling::Sampler::new(42, pixel, k);
                 let l_in = trace_path(
                     flat,
                     &probe(o, w),

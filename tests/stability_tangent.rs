@@ -16,14 +16,14 @@
 //! (32 of 64).
 
 use crate::common::*;
-use hexray::bvh::intersect_closest;
-use hexray::camera::Camera;
-use hexray::cpu::Faults;
+use hexray::accel::bvh::intersect_closest;
 use hexray::film::Film;
-use hexray::flat::FlatScene;
-use hexray::method::Method;
+use hexray::layout::FlatScene;
 use hexray::scene::{MaterialDesc, Scene, SceneDesc, SphereDesc};
-use hexray::subpath::density_vanishes;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
+use hexray::transport::subpath::density_vanishes;
 
 const SCENE: &str = "scenes/stability/grazing.json";
 const SIZE: u32 = 4;
@@ -77,7 +77,7 @@ fn assert_every_ray_is_tangent(scene: &Scene) {
                 let material = flat.materials[hit.material as usize];
                 let cos = hit.n.dot(-ray.d);
                 assert!(
-                    material.kind == hexray::flat::KIND_MIRROR && density_vanishes(cos),
+                    material.kind == hexray::layout::KIND_MIRROR && density_vanishes(cos),
                     "pixel ({x}, {y}): ray {ray:?} meets material kind {} at cos {cos:e}",
                     material.kind
                 );

@@ -47,9 +47,9 @@
 //! slab of index 1.55 instead of 1.5 (T 1.3 % lower at normal incidence), are rejected.
 
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::film::Film;
 use hexray::scene::{CameraDesc, MaterialDesc, Scene, SceneDesc};
+use hexray::transport::faults::Faults;
 
 const BOX: &str = "scenes/stability/thin_box.json";
 const BOX_GAP: &str = "scenes/stability/thin_box_gap.json";
@@ -360,7 +360,7 @@ fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_cpu() {
                 SIZE,
                 SPP,
                 56,
-                hexray::method::Method::Bdpt,
+                hexray::transport::method::Method::Bdpt,
                 Faults::NONE,
             )
         },
@@ -381,7 +381,7 @@ fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_gpu() {
                 SIZE,
                 SPP,
                 57,
-                hexray::method::Method::Bdpt,
+                hexray::transport::method::Method::Bdpt,
                 Faults::NONE,
             )
         },

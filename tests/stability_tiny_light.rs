@@ -20,10 +20,11 @@
 
 use crate::common::reference::{film_mean_z, means_agree};
 use crate::common::*;
-use hexray::camera::Camera;
-use hexray::cpu::{trace_path, Faults};
+use hexray::cpu::trace_path;
 use hexray::film::Film;
-use hexray::sampling::Sampler;
+use hexray::math::sampling::Sampler;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
 use rayon::prelude::*;
 
 const SCENE: &str = "scenes/stability/tiny_light_1e2.json";

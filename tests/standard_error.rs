@@ -15,9 +15,9 @@
 //! to be rejected for light tracing: that is why the batch means are there.
 
 use crate::common::*;
-use hexray::cpu::Faults;
 use hexray::film::Film;
-use hexray::method::Method;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// The χ² statistic of k image means (red channel) against their mean claimed variance, and

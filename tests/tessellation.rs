@@ -13,7 +13,7 @@
 
 use crate::common::parity::parity;
 use crate::common::*;
-use hexray::cpu::Faults;
+use hexray::transport::faults::Faults;
 
 const ROOM: &str = "scenes/tncg15_room.json";
 const TESSELLATED: &str = "scenes/perf/tncg15_room_x100.json";

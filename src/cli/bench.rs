@@ -3,9 +3,9 @@
 use super::*;
 use anyhow::Result;
 use clap::Args;
-use hexray::method::Method;
-use hexray::output;
+use hexray::film::output;
 use hexray::scene::Scene;
+use hexray::transport::method::Method;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -38,7 +38,7 @@ pub(crate) struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
     pub(crate) method: Vec<Method>,
     /// Shadow rays per diffuse vertex (path tracing).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::math::sampling::MAX_LIGHT_SAMPLES as i64))]
     pub(crate) light_samples: u32,
     /// CPU threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -67,7 +67,7 @@ impl std::fmt::Display for BenchBackend {
 const SHORT_ROW_SECONDS: f64 = 0.25;
 
 pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
-    use hexray::bench::{self, Which};
+    use hexray::analysis::bench::{self, Which};
     for s in &args.scenes {
         if let Err(e) = Scene::load(std::path::Path::new(s)) {
             eprintln!("error: {e}");

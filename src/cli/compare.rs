@@ -47,7 +47,7 @@ pub(crate) fn variance_beside(path: &std::path::Path) -> Option<PathBuf> {
 }
 
 pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
-    let read = |p: &PathBuf| hexray::compare::read_image(p);
+    let read = |p: &PathBuf| hexray::analysis::compare::read_image(p);
     let var = args
         .var
         .clone()
@@ -57,16 +57,16 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
         .clone()
         .or_else(|| variance_beside(&args.reference));
     let mut notes = Vec::new();
-    notes.extend(hexray::compare::scene_note(
+    notes.extend(hexray::analysis::compare::scene_note(
         &args.candidate,
         &args.reference,
     ));
     let result = (|| -> Result<_> {
         if let Some(v) = &var {
-            hexray::compare::check_variance_pair(&args.candidate, v)?;
+            hexray::analysis::compare::check_variance_pair(&args.candidate, v)?;
         }
         if let Some(v) = &ref_var {
-            hexray::compare::check_variance_pair(&args.reference, v)?;
+            hexray::analysis::compare::check_variance_pair(&args.reference, v)?;
         }
         let mut c = read(&args.candidate)?;
         let r = read(&args.reference)?;
@@ -75,23 +75,25 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
             _ => None,
         };
         // A render at k times the reference's size: each k x k block is one reference pixel.
-        if let Some(k) = hexray::compare::block_factor(&c, &r) {
-            c = hexray::compare::block_mean(&c, k, false);
+        if let Some(k) = hexray::analysis::compare::block_factor(&c, &r) {
+            c = hexray::analysis::compare::block_mean(&c, k, false);
             if let Some((vc, _)) = vars.as_mut() {
-                *vc = hexray::compare::block_mean(vc, k, true);
+                *vc = hexray::analysis::compare::block_mean(vc, k, true);
             }
             notes.push(format!(
                 "the candidate is {k}x the reference's size: compared as the means of its \
                  {k}x{k} blocks"
             ));
         }
-        hexray::compare::compare(&c, &r, vars.as_ref().map(|(a, b)| (a, b))).with_context(|| {
-            format!(
-                "comparing {} with {}",
-                args.candidate.display(),
-                args.reference.display()
-            )
-        })
+        hexray::analysis::compare::compare(&c, &r, vars.as_ref().map(|(a, b)| (a, b))).with_context(
+            || {
+                format!(
+                    "comparing {} with {}",
+                    args.candidate.display(),
+                    args.reference.display()
+                )
+            },
+        )
     })();
     match result {
         Ok(mut cmp) => {
@@ -102,7 +104,7 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
                     ("reference", &args.reference),
                 ]
                 .iter()
-                .filter_map(|(what, path)| hexray::compare::consistency_note(what, path)),
+                .filter_map(|(what, path)| hexray::analysis::compare::consistency_note(what, path)),
             );
             if args.json {
                 println!("{}", serde_json::to_string(&cmp).unwrap());

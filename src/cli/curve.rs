@@ -3,11 +3,11 @@
 use super::*;
 use anyhow::{Context, Result};
 use clap::Args;
-use hexray::camera::Camera;
-use hexray::flat::FlatScene;
-use hexray::method::Method;
-use hexray::output;
+use hexray::film::output;
+use hexray::layout::FlatScene;
 use hexray::scene::Scene;
+use hexray::transport::camera::Camera;
+use hexray::transport::method::Method;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -56,8 +56,8 @@ pub(crate) struct CurveArgs {
 }
 
 pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
-    use hexray::bench::{make_backend, Which};
-    use hexray::chart::{relmse_chart, XAxis};
+    use hexray::analysis::bench::{make_backend, Which};
+    use hexray::analysis::chart::{relmse_chart, XAxis};
     let scene = match Scene::load(&args.scene) {
         Ok(s) => s,
         Err(e) => {
@@ -65,7 +65,7 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
             return Ok(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
-    let reference = match hexray::compare::read_image(&args.reference) {
+    let reference = match hexray::analysis::compare::read_image(&args.reference) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: --reference: {e:#}");
@@ -75,11 +75,11 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
     if let Some(&n) = args
         .light_samples
         .iter()
-        .find(|&&n| n == 0 || n > hexray::sampling::MAX_LIGHT_SAMPLES)
+        .find(|&&n| n == 0 || n > hexray::math::sampling::MAX_LIGHT_SAMPLES)
     {
         eprintln!(
             "error: --light-samples {n}: give 1 to {}",
-            hexray::sampling::MAX_LIGHT_SAMPLES
+            hexray::math::sampling::MAX_LIGHT_SAMPLES
         );
         return Ok(ExitCode::from(EXIT_BAD_INPUT));
     }
@@ -89,7 +89,7 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
             .overlay_scene
             .clone()
             .unwrap_or(scene.desc.name.clone());
-        let rows = match hexray::curve::read_overlay(o, &name, &args.overlay_name) {
+        let rows = match hexray::analysis::curve::read_overlay(o, &name, &args.overlay_name) {
             Ok(v) => v,
             Err(e) => {
                 eprintln!("error: --overlay: {e:#}");
@@ -151,7 +151,7 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
                 if !devices.contains(&entry) {
                     devices.push(entry);
                 }
-                let (mut series, warmup) = hexray::curve::measure(
+                let (mut series, warmup) = hexray::analysis::curve::measure(
                     &scene.desc.name,
                     backend.as_mut(),
                     w,
@@ -187,16 +187,19 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    output::write_text(&args.out.join("curve.csv"), &hexray::curve::csv(&points))?;
+    output::write_text(
+        &args.out.join("curve.csv"),
+        &hexray::analysis::curve::csv(&points),
+    )?;
     let mut all = points.clone();
     all.extend(overlay);
     let caption = format!(
         "{}x{} · {} · {} · {}",
         w,
         h,
-        hexray::bench::machine(),
+        hexray::analysis::bench::machine(),
         devices.join("; "),
-        hexray::bench::utc_date()
+        hexray::analysis::bench::utc_date()
     );
     let title = format!("{}: relMSE against", scene.desc.name);
     relmse_chart(

@@ -2,8 +2,8 @@
 
 use super::*;
 use clap::Args;
-use hexray::flat::FlatScene;
 use hexray::gpu;
+use hexray::layout::FlatScene;
 use hexray::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -68,7 +68,7 @@ pub(crate) fn scene_info(path: &Path) -> ExitCode {
                 + std::mem::size_of_val(&flat.emitters[..]),
         ),
     ];
-    let gpu_arrays = gpu::render::scene_arrays(&flat);
+    let gpu_arrays = gpu::limits::scene_arrays(&flat);
     let list = |arrays: &[(&str, usize)]| {
         arrays
             .iter()
@@ -110,7 +110,7 @@ pub(crate) fn scene_info(path: &Path) -> ExitCode {
         out,
         "bvh: {} nodes (four-wide), depth {}, {} prims entries",
         flat.nodes.len(),
-        hexray::bvh::depth(&flat.nodes),
+        hexray::accel::bvh::depth(&flat.nodes),
         flat.prims.len()
     );
     let _ = writeln!(

@@ -3,7 +3,7 @@
 use super::*;
 use anyhow::Result;
 use clap::Args;
-use hexray::output;
+use hexray::film::output;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -46,9 +46,9 @@ pub(crate) fn merge(args: &MergeArgs) -> Result<ExitCode> {
     let parts = match args
         .parts
         .iter()
-        .map(|p| hexray::merge::load_part(p))
+        .map(|p| hexray::film::parts::load_part(p))
         .collect::<Result<Vec<_>, _>>()
-        .and_then(hexray::merge::merge)
+        .and_then(hexray::film::parts::merge)
     {
         Ok(m) => m,
         Err(e) => {

@@ -16,7 +16,7 @@ pub(crate) use merge::*;
 pub(crate) use render::*;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use hexray::method::Method;
+use hexray::transport::method::Method;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -4,16 +4,16 @@
 use super::*;
 use anyhow::{Context, Result};
 use clap::Args;
-use hexray::camera::Camera;
+use hexray::film::file::{self as film_file, FilmIdentity};
+use hexray::film::output::{self, Metadata, RgbImage};
 use hexray::film::Film;
-use hexray::film_file::{self, FilmIdentity};
-use hexray::flat::FlatScene;
 use hexray::gpu;
 use hexray::interrupt::StopRequest;
-use hexray::method::Method;
-use hexray::output::{self, Metadata, RgbImage};
+use hexray::layout::FlatScene;
 use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
 use hexray::scene::Scene;
+use hexray::transport::camera::Camera;
+use hexray::transport::method::Method;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -58,7 +58,7 @@ pub(crate) struct RenderArgs {
     pub(crate) alpha: Option<f32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
     /// (path tracing only).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::sampling::MAX_LIGHT_SAMPLES as i64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::math::sampling::MAX_LIGHT_SAMPLES as i64))]
     pub(crate) light_samples: u32,
     /// Samples per pixel (iterations for all methods but path). Without --time the default is
     /// 64 for path and 8 for the others (about as long at 512x512); with --time, no
@@ -142,13 +142,13 @@ pub(crate) fn merge_radius_of(
     radius: Option<f32>,
     alpha: Option<f32>,
     flat: &FlatScene,
-) -> std::result::Result<hexray::merging::MergeRadius, String> {
+) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
     if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
             "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
         ));
     }
-    let mut r = hexray::merging::MergeRadius::default_for(flat, method);
+    let mut r = hexray::transport::merging::MergeRadius::default_for(flat, method);
     if let Some(v) = radius {
         r.initial = v;
     }
@@ -433,9 +433,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
                 Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
                 None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
             };
-            if let Err(e) = gpu::render::check_scene_fits(&g.device.limits(), residency, &flat)
+            if let Err(e) = gpu::limits::check_scene_fits(&g.device.limits(), residency, &flat)
                 .and_then(|_| {
-                    gpu::render::check_image_fits(
+                    gpu::limits::check_image_fits(
                         &g.device.limits(),
                         method,
                         args.width,
@@ -453,10 +453,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
                 &flat,
                 camera,
                 args.seed,
-                hexray::cpu::Faults::NONE,
+                hexray::transport::faults::Faults::NONE,
                 checks,
                 residency,
                 method,
+                hexray::cpu::shadow_probe::shadow_threshold_for(method, &flat, &camera),
             )?;
             renderer.set_light_samples(args.light_samples);
             renderer.set_merge_radius(radius);
@@ -466,7 +467,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
                     compile.elapsed().as_secs_f64()
                 );
             }
-            Box::new(gpu::GpuBackend {
+            Box::new(hexray::render::GpuBackend {
                 renderer,
                 adapter: gpu::context::describe(&g.info),
             })

@@ -4,17 +4,17 @@
 //! next-event estimation (s = 1) and a connection to each stored vertex of the light subpath
 //! traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light
 //! pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
-//! strategy that can make its path (`crate::subpath`), so the sum over strategies is unbiased.
+//! strategy that can make its path (`crate::transport::subpath`), so the sum over strategies is unbiased.
 //! Where the scene has planar mirrors, BDPT's next-event estimation also aims at the light's
 //! image in each (step 4b), and the paths it makes are its alone, a partition of the weights
-//! (`crate::planar_mirror`).
+//! (`crate::transport::planar_mirror`).
 //! The visibility rays of next-event estimation and of the connections are rouletted by their
 //! contribution (`subpath::shadow_survival`).
 //!
 //! The same pass, with photons, is the camera pass of the merging methods. VCM (Georgiev et al.
 //! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the
 //! iteration (of any pixel's light subpath) within the radius r, found in the hash grid
-//! (`crate::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its two
+//! (`crate::accel::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its two
 //! sides added here: `merge_camera_share` once per query, `merge_light_share` per photon, which
 //! the CPU keeps in a `PhotonRecord`; the same arithmetic in the same order). With
 //! the radius 0 it is BDPT, bit for bit. SPPM is the special case without connections
@@ -32,22 +32,25 @@
 //! wave and takes the other strategies in the pixel's own wave (`own` in `shaders/bdpt.wgsl`),
 //! which sums to the same estimate.
 
-use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
-use crate::bvh::intersect_closest;
-use crate::camera::Camera;
+use crate::accel::bvh::intersect_closest;
+use crate::accel::hash_grid::HashGrid;
+use crate::accel::packet::occluded_all;
 use crate::cpu::light_path::{is_diffuse, max_path_edges};
-use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::flat::{FlatScene, KIND_EMITTER};
-use crate::geometry::{offset_ray_origin, Ray};
-use crate::hash_grid::HashGrid;
-use crate::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::merging::merge_share;
-use crate::packet::occluded_all;
-use crate::planar_mirror::{image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light};
-use crate::sampling::{
+use crate::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
+use crate::layout::{FlatScene, KIND_EMITTER};
+use crate::math::geometry::{offset_ray_origin, Ray};
+use crate::math::sampling::{
     dim_bsdf, dim_connection, dim_light, dim_merge, dim_mirror, Sampler, DIM_CAMERA,
 };
-use crate::subpath::{
+use crate::transport::bsdf::{eval_diffuse, sample_bsdf, Transport};
+use crate::transport::camera::Camera;
+use crate::transport::faults::Faults;
+use crate::transport::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::transport::merging::merge_share;
+use crate::transport::planar_mirror::{
+    image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light,
+};
+use crate::transport::subpath::{
     density_vanishes, merge_camera_share, merge_light_share, merge_survival, shadow_survival,
     weight_connection, weight_emission, weight_next_event, LightVertex, MergeMis, SubpathMis,
     MERGE_RR_THRESHOLD,
@@ -427,7 +430,7 @@ impl CameraPass<'_> {
                     let mut gathered = Vec3::ZERO;
                     let camera_share = merge_camera_share(&mis, &merge, pdf_rev);
                     let area_share = share * share;
-                    let vc_share = crate::subpath::mis(area_share);
+                    let vc_share = crate::transport::subpath::mis(area_share);
                     let radius = share * self.radius;
                     photons
                         .grid
@@ -573,9 +576,9 @@ impl CameraTerms {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::method::Method;
-    use crate::sampling::{pcg4d, u32_to_unit_f32};
-    use crate::subpath::weight_merge;
+    use crate::math::sampling::{pcg4d, u32_to_unit_f32};
+    use crate::transport::method::Method;
+    use crate::transport::subpath::weight_merge;
 
     /// A number in [0, scale) for test data: number `k` of item `i`.
     fn rnd(i: u32, k: u32, scale: f32) -> f32 {

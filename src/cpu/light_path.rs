@@ -3,7 +3,7 @@
 //! splatted into the pixel that sees it (the strategies with t = 1), and, for BDPT, stored for
 //! the camera pass to connect to. For BDPT, a subpath whose first hit is a planar mirror
 //! ends at the diffuse vertex after it: every path through that vertex is next-event estimation's
-//! through the mirror (`crate::planar_mirror`).
+//! through the mirror (`crate::transport::planar_mirror`).
 //!
 //! `shaders/light_path.wgsl` is this function again, with the same names, steps and step
 //! comments.
@@ -12,7 +12,7 @@
 //! estimate of everything the camera sees on non-specular surfaces, and nothing of what it sees
 //! through a mirror or glass (a light subpath can never be connected to the camera through a
 //! specular bounce; those surfaces stay black). For BDPT and VCM the splats carry their MIS
-//! weights against every other strategy (`crate::subpath`), and the vertices are stored for
+//! weights against every other strategy (`crate::transport::subpath`), and the vertices are stored for
 //! the camera pass to connect to and (VCM, SPPM) merge with; SPPM only stores them.
 //!
 //! The light subpath carries flux (importance transport): it starts with α = Le / p_A at the
@@ -22,19 +22,20 @@
 //! times the geometry term to the camera, divided by the N light subpaths of an iteration
 //! (Veach's thesis, section 10.2; pbrt-v4's `ConnectBDPT` with t = 1).
 
-use crate::bsdf::{eval_diffuse, sample_bsdf, Transport};
-use crate::bvh::intersect_closest;
-use crate::camera::{Camera, Raster};
-use crate::cpu::path::{Faults, RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::flat::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
-use crate::geometry::{offset_ray_origin, Ray};
-use crate::light::sample_emission;
-use crate::merging::merge_share;
-use crate::packet::occluded_all;
-use crate::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
-use crate::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
-use crate::splat::Splats;
-use crate::subpath::{
+use crate::accel::bvh::intersect_closest;
+use crate::accel::packet::occluded_all;
+use crate::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
+use crate::layout::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
+use crate::math::geometry::{offset_ray_origin, Ray};
+use crate::math::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
+use crate::transport::bsdf::{eval_diffuse, sample_bsdf, Transport};
+use crate::transport::camera::{Camera, Raster};
+use crate::transport::faults::Faults;
+use crate::transport::light::sample_emission;
+use crate::transport::merging::merge_share;
+use crate::transport::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
+use crate::transport::splat::Splats;
+use crate::transport::subpath::{
     density_vanishes, shadow_survival, weight_light_point_to_camera, weight_to_camera, LightVertex,
     MergeMis, SubpathMis, LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX,
 };
@@ -86,8 +87,8 @@ pub struct LightPass<'a> {
 
 /// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU
 /// traces a chunk's splat rays together, eight at a time in SIMD lanes
-/// ([`crate::packet::occluded_all`]: the rays of a chunk all end at the eye), and splats the
-/// visible ones ([`add_splats`]). Splat sums do not depend on their order (`crate::splat`), so
+/// ([`crate::accel::packet::occluded_all`]: the rays of a chunk all end at the eye), and splats the
+/// visible ones ([`add_splats`]). Splat sums do not depend on their order (`crate::transport::splat`), so
 /// the image is bit for bit that of splatting each at once, as `shaders/light_path.wgsl` does.
 #[derive(Clone, Copy, Debug)]
 pub struct PendingSplat {

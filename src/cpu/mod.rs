@@ -4,18 +4,21 @@
 pub mod bdpt;
 pub mod light_path;
 pub mod path;
+pub mod path_wavefront;
+pub mod shadow_probe;
 
-pub use path::{trace_path, Faults};
+use crate::transport::faults::Faults;
+pub use path::trace_path;
 
-use crate::camera::Camera;
+use crate::accel::hash_grid::{entry_index, HashGrid};
 use crate::film::{Film, PixelStats};
-use crate::flat::FlatScene;
-use crate::hash_grid::{entry_index, HashGrid};
-use crate::merging::{kernel_normalization, MergeRadius};
-use crate::method::Method;
-use crate::sampling::Sampler;
-use crate::splat::Splats;
-use crate::subpath::{LightVertex, MergeMis};
+use crate::layout::FlatScene;
+use crate::math::sampling::Sampler;
+use crate::transport::camera::Camera;
+use crate::transport::merging::{kernel_normalization, MergeRadius};
+use crate::transport::method::Method;
+use crate::transport::splat::Splats;
+use crate::transport::subpath::{LightVertex, MergeMis};
 use light_path::{LightPass, LightPassMode};
 use rayon::prelude::*;
 
@@ -48,7 +51,7 @@ pub fn render_pass(
     let updated: Vec<(Vec<(usize, PixelStats)>, u64)> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
-            // The tile's pixels, their paths traced together (`path::trace_pixels`).
+            // The tile's pixels, their paths traced together (`path_wavefront::trace_pixels`).
             let mut tile = Vec::with_capacity((TILE * TILE) as usize);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
@@ -58,7 +61,7 @@ pub fn render_pass(
             let mut stats: Vec<PixelStats> =
                 tile.iter().map(|&(i, _, _)| pixels[i as usize]).collect();
             let mut rays = 0u64;
-            path::trace_pixels(
+            path_wavefront::trace_pixels(
                 scene,
                 camera,
                 &tile,
@@ -112,7 +115,7 @@ pub struct LightPassBuffers {
     pub radius: MergeRadius,
     /// n_c per pixel (`subpath::camera_subpaths`).
     pub camera_subpaths: Vec<u32>,
-    /// τ (`subpath::shadow_threshold`; BDPT only, 0 for light tracing).
+    /// τ (`shadow_probe::shadow_threshold`; BDPT only, 0 for light tracing).
     pub shadow_threshold: f32,
 }
 
@@ -130,21 +133,17 @@ impl LightPassBuffers {
             starts: Vec::new(),
             grid: HashGrid::default(),
             records: Vec::new(),
-            grid_min: crate::merging::scene_bounds(scene).0,
+            grid_min: crate::transport::merging::scene_bounds(scene).0,
             radius,
             camera_subpaths: if bdpt {
-                crate::subpath::camera_subpaths(
-                    &crate::subpath::specular_pixels(scene, camera),
-                    crate::subpath::specular_camera_subpaths(method, radius.initial),
+                crate::transport::subpath::camera_subpaths(
+                    &crate::transport::subpath::specular_pixels(scene, camera),
+                    crate::transport::subpath::specular_camera_subpaths(method, radius.initial),
                 )
             } else {
                 vec![1; camera.width as usize * camera.height as usize]
             },
-            shadow_threshold: if method.connects() {
-                crate::subpath::shadow_threshold(scene, camera)
-            } else {
-                0.0
-            },
+            shadow_threshold: shadow_probe::shadow_threshold_for(method, scene, camera),
         }
     }
 }

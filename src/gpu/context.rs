@@ -77,9 +77,9 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
 /// software adapter (lavapipe) keeps `base`.
 pub fn default_merge_radius(
     info: &wgpu::AdapterInfo,
-    scene: &crate::flat::FlatScene,
-    base: crate::merging::MergeRadius,
-) -> crate::merging::MergeRadius {
+    scene: &crate::layout::FlatScene,
+    base: crate::transport::merging::MergeRadius,
+) -> crate::transport::merging::MergeRadius {
     if info.device_type == wgpu::DeviceType::Cpu {
         base
     } else {

@@ -4,12 +4,14 @@
 
 pub mod parity;
 
-use hexray::camera::Camera;
-use hexray::cpu::{render_iterations, render_pass, Faults, LightPassBuffers};
+use hexray::cpu::shadow_probe::shadow_threshold_for;
+use hexray::cpu::{render_iterations, render_pass, LightPassBuffers};
 use hexray::film::Film;
-use hexray::flat::FlatScene;
-use hexray::method::Method;
+use hexray::layout::FlatScene;
 use hexray::scene::Scene;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 use std::path::{Path, PathBuf};
 
 pub mod reference;
@@ -112,7 +114,7 @@ pub fn render_cpu_merging(
     spp: u32,
     seed: u32,
     method: Method,
-    radius: hexray::merging::MergeRadius,
+    radius: hexray::transport::merging::MergeRadius,
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
@@ -142,7 +144,7 @@ pub fn render_cpu_iterations(
     iterations: u32,
     seed: u32,
     method: Method,
-    radius: hexray::merging::MergeRadius,
+    radius: hexray::transport::merging::MergeRadius,
     faults: Faults,
 ) -> Vec<Film> {
     let (scene, flat) = load(rel);
@@ -180,13 +182,13 @@ fn render_cpu_flat(
     method: Method,
     light_samples: u32,
     faults: Faults,
-    radius: Option<hexray::merging::MergeRadius>,
+    radius: Option<hexray::transport::merging::MergeRadius>,
 ) -> Film {
     let camera = Camera::new(&scene.desc.camera, width, height);
     let mut film = Film::new(width, height);
     if method.splats() {
-        let radius =
-            radius.unwrap_or_else(|| hexray::merging::MergeRadius::default_for(flat, method));
+        let radius = radius
+            .unwrap_or_else(|| hexray::transport::merging::MergeRadius::default_for(flat, method));
         let mut buffers = LightPassBuffers::new(flat, &camera, method, radius);
         render_iterations(
             flat,
@@ -328,7 +330,7 @@ pub fn render_gpu_merging(
     spp: u32,
     seed: u32,
     method: Method,
-    radius: hexray::merging::MergeRadius,
+    radius: hexray::transport::merging::MergeRadius,
     faults: Faults,
 ) -> Film {
     let (scene, flat) = load(rel);
@@ -358,7 +360,7 @@ pub fn render_gpu_iterations(
     iterations: u32,
     seed: u32,
     method: Method,
-    radius: hexray::merging::MergeRadius,
+    radius: hexray::transport::merging::MergeRadius,
     faults: Faults,
 ) -> Vec<Film> {
     let (scene, flat) = load(rel);
@@ -387,7 +389,7 @@ fn render_gpu_flat(
     method: Method,
     light_samples: u32,
     faults: Faults,
-    radius: Option<hexray::merging::MergeRadius>,
+    radius: Option<hexray::transport::merging::MergeRadius>,
 ) -> Film {
     let mut r = gpu_renderer(gpu, scene, flat, width, height, seed, method, faults);
     r.set_light_samples(light_samples);
@@ -412,16 +414,18 @@ pub fn gpu_renderer(
     method: Method,
     faults: Faults,
 ) -> hexray::gpu::GpuRenderer {
+    let camera = Camera::new(&scene.desc.camera, width, height);
     hexray::gpu::GpuRenderer::new(
         &gpu.device,
         &gpu.queue,
         flat,
-        Camera::new(&scene.desc.camera, width, height),
+        camera,
         seed,
         faults,
         hexray::gpu::Checks::Unchecked,
         hexray::gpu::Residency::preferred(&gpu.info, &gpu.device.limits(), flat),
         method,
+        shadow_threshold_for(method, flat, &camera),
     )
     .unwrap()
 }
@@ -616,7 +620,7 @@ pub fn against_truth(
     group: impl Fn(u32, u32) -> Option<usize>,
     alpha: f64,
 ) -> TruthReport {
-    use hexray::stats::normal_two_sided_p;
+    use hexray::analysis::stats::normal_two_sided_p;
     assert_eq!(exact.len(), film.pixels.len());
     // Per group: the sums of the pixel means, variances and exact values, and the pixel count.
     #[derive(Clone, Default)]
@@ -702,7 +706,7 @@ pub fn against_truth(
 /// Per pixel, the mean over channels of (a − b)²/(b² + 0.01): the terms relMSE averages (the
 /// second film as the reference).
 pub fn relmse_terms(a: &Film, b: &Film) -> Vec<f64> {
-    use hexray::stats::MeanImage;
+    use hexray::analysis::stats::MeanImage;
     let (a, b) = (MeanImage::from_film(a), MeanImage::from_film(b));
     a.mean
         .iter()

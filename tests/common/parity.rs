@@ -2,10 +2,10 @@
 //! stability tests compare against, rendered once per test binary.
 
 use glam::Vec3;
-use hexray::cpu::Faults;
+use hexray::analysis::stats::{welch_blocks, MeanImage};
 use hexray::film::Film;
-use hexray::method::Method;
-use hexray::stats::{welch_blocks, MeanImage};
+use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -83,7 +83,7 @@ pub fn gpu_against_cpu_iterations(
     size: u32,
     iterations: u32,
     method: Method,
-    radius: hexray::merging::MergeRadius,
+    radius: hexray::transport::merging::MergeRadius,
     gpu_faults: Faults,
 ) -> Option<Parity> {
     let gpu = super::gpu()?;

@@ -2,9 +2,9 @@
 //! `docs/stability.sh references`), and the statistic that compares a render against one.
 
 use super::repo;
+use hexray::analysis::stats::{welch_blocks, MeanImage};
+use hexray::film::output::read_exr;
 use hexray::film::Film;
-use hexray::output::read_exr;
-use hexray::stats::{welch_blocks, MeanImage};
 
 /// A reference render: `NAME.exr` (mean) and `NAME_var.exr` (variance of the mean), with the
 /// samples per pixel from its metadata.

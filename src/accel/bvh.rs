@@ -1,0 +1,882 @@
+//! The bounding volume hierarchy: a binned-SAH build of a binary tree, collapsed into a
+//! four-wide tree of depth-first nodes that hold their children's boxes ([`BvhNode`]), and the
+//! traversal of one ray (closest hit or any hit) that the CPU's integrators use and
+//! `shaders/bvh.wgsl` repeats; the path tracer traces its rays eight at a time instead where that
+//! pays ([`crate::accel::packet`], the same hits).
+
+use crate::accel::wide_bvh::intersect_wide;
+use crate::layout::{
+    BvhNode, FlatScene, Sphere, Triangle, TrianglePack, EMPTY_SLOT, PRIM_PADDING, PRIM_SPHERE_BIT,
+};
+use crate::math::geometry::{
+    intersect_sphere, intersect_triangles4, safe_inverse, sphere_point, triangle_hit_point,
+    triangle_normal, Ray, Ray4, SurfaceHit, TriangleHits4,
+};
+use arrayvec::ArrayVec;
+use glam::Vec3;
+
+/// At most this many primitives in a leaf (pbrt-v4's `maxPrimsInNode` default is 255 for its
+/// general BVH; small leaves suit a shader that visits one node per loop iteration).
+pub const MAX_LEAF: usize = 4;
+/// SAH buckets per axis.
+const BINS: usize = 16;
+/// Depth of the binary tree beyond which a node becomes a leaf whatever its size. The four-wide
+/// tree is no deeper, and the traversal pushes at most three children per level, so its stack
+/// never holds more than `3 * MAX_DEPTH` entries.
+const MAX_DEPTH: usize = 60;
+/// The most entries a traversal of the four-wide tree can push (three per level); the WGSL
+/// stack is sized to the scene ([`stack_size`]), which this bounds.
+pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
+/// The CPU's traversal stack over the wide tree: at most seven children pushed per level, and
+/// the wide tree is no deeper than the four-wide one.
+pub(crate) const WIDE_STACK_SIZE: usize = (crate::accel::wide_bvh::WIDTH - 1) * MAX_DEPTH;
+/// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2).
+const TRAVERSAL_COST: f32 = 0.5;
+
+#[derive(Clone, Copy)]
+struct Aabb {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+    fn grow(&mut self, o: &Aabb) {
+        self.min = self.min.min(o.min);
+        self.max = self.max.max(o.max);
+    }
+    fn grow_point(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    fn area(&self) -> f32 {
+        let d = (self.max - self.min).max(Vec3::ZERO);
+        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+    }
+    fn centroid(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+}
+
+struct PrimInfo {
+    bounds: Aabb,
+    centroid: Vec3,
+    id: u32,
+}
+
+/// A node of the binary tree as the builder makes it, before flattening.
+enum Built {
+    Leaf {
+        bounds: Aabb,
+        offset: u32,
+        count: u32,
+    },
+    Interior {
+        bounds: Aabb,
+        children: Box<[Built; 2]>,
+    },
+}
+
+impl Built {
+    fn bounds(&self) -> &Aabb {
+        match self {
+            Built::Leaf { bounds, .. } | Built::Interior { bounds, .. } => bounds,
+        }
+    }
+}
+
+/// Builds the BVH over all triangles and spheres; returns the nodes (root first) and the
+/// primitive references that leaves index into: every primitive once, each leaf starting at a
+/// multiple of four, with [`PRIM_PADDING`] entries in the gaps and at the end (so `prims` is
+/// not one entry per primitive).
+pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u32>) {
+    let mut info: Vec<PrimInfo> = Vec::with_capacity(triangles.len() + spheres.len());
+    for (i, t) in triangles.iter().enumerate() {
+        let mut b = Aabb::EMPTY;
+        for v in [t.v0, t.v1, t.v2] {
+            b.grow_point(Vec3::from(v));
+        }
+        info.push(PrimInfo {
+            bounds: b,
+            centroid: b.centroid(),
+            id: i as u32,
+        });
+    }
+    for (i, s) in spheres.iter().enumerate() {
+        let c = Vec3::from(s.center);
+        // Widen by one ulp-scale step so rounding of c +- r never cuts the sphere.
+        let r = Vec3::splat(s.radius) + c.abs() * f32::EPSILON;
+        let b = Aabb {
+            min: c - r - Vec3::splat(s.radius * f32::EPSILON),
+            max: c + r + Vec3::splat(s.radius * f32::EPSILON),
+        };
+        info.push(PrimInfo {
+            bounds: b,
+            centroid: c,
+            id: i as u32 | PRIM_SPHERE_BIT,
+        });
+    }
+    let n = info.len();
+    let mut nodes = Vec::with_capacity(n);
+    if n == 0 {
+        // Nothing to hit: a root whose four slots are empty.
+        nodes.push(BvhNode {
+            count: [EMPTY_SLOT; 4],
+            ..Default::default()
+        });
+        return (nodes, Vec::new());
+    }
+    flatten_root(&build_node(&mut info, 0, 0), &info, nodes)
+}
+
+/// Flattens the tree `root` into `nodes` and the padded `prims` that [`build`] returns.
+fn flatten_root(
+    root: &Built,
+    info: &[PrimInfo],
+    mut nodes: Vec<BvhNode>,
+) -> (Vec<BvhNode>, Vec<u32>) {
+    let mut prims = Vec::with_capacity(info.len());
+    flatten(root, info, &mut nodes, &mut prims);
+    prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
+    (nodes, prims)
+}
+
+/// The CPU's copy of the leaves' triangles: pack k holds entries 4k..4k + 4 of `prims` (a leaf
+/// starts at a multiple of four, so a pack never mixes two leaves), for
+/// [`intersect_triangles4`].
+pub fn triangle_packs(triangles: &[Triangle], prims: &[u32]) -> Vec<TrianglePack> {
+    prims
+        .chunks(4)
+        .map(|entries| {
+            let mut pack = TrianglePack::default();
+            for (lane, &prim) in entries.iter().enumerate() {
+                if prim == PRIM_PADDING {
+                    continue;
+                }
+                if prim & PRIM_SPHERE_BIT != 0 {
+                    pack.spheres |= 1 << lane;
+                } else {
+                    pack.set_triangle(lane, &triangles[prim as usize]);
+                }
+            }
+            pack
+        })
+        .collect()
+}
+
+/// Appends the node `built` and its interior descendants in depth-first order as four-wide nodes;
+/// returns its index. The binary node's two children become up to four by repeatedly opening the
+/// interior child of largest surface area (the collapse of Wald et al., "Getting Rid of Packets",
+/// 2008), which keeps the SAH tree's structure and halves the levels. A root that is a leaf (a
+/// scene of up to `MAX_LEAF` primitives the SAH does not split) becomes a node of one slot.
+///
+/// Each leaf's primitives are appended to `prims` starting at a multiple of four (the gap filled
+/// with [`PRIM_PADDING`], which no leaf covers), triangles before spheres: the CPU tests them
+/// four at a time from [`triangle_packs`], and both backends visit them in this order.
+fn flatten(
+    built: &Built,
+    info: &[PrimInfo],
+    nodes: &mut Vec<BvhNode>,
+    prims: &mut Vec<u32>,
+) -> u32 {
+    let mut kids: Vec<&Built> = match built {
+        Built::Interior { children, .. } => children.iter().collect(),
+        Built::Leaf { .. } => vec![built],
+    };
+    while kids.len() < 4 {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, Built::Interior { .. }))
+            .max_by(|(_, a), (_, b)| a.bounds().area().total_cmp(&b.bounds().area()))
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let Built::Interior { children, .. } = kids.remove(i) else {
+            unreachable!()
+        };
+        kids.extend(children.iter());
+    }
+    let index = nodes.len();
+    nodes.push(BvhNode::default());
+    let mut node = BvhNode {
+        count: [EMPTY_SLOT; 4],
+        ..Default::default()
+    };
+    for (c, kid) in kids.iter().enumerate() {
+        let b = kid.bounds();
+        (node.min_x[c], node.min_y[c], node.min_z[c]) = (b.min.x, b.min.y, b.min.z);
+        (node.max_x[c], node.max_y[c], node.max_z[c]) = (b.max.x, b.max.y, b.max.z);
+        match kid {
+            Built::Leaf { offset, count, .. } => {
+                debug_assert!(*count > 0, "an empty leaf would read as an interior node");
+                prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
+                node.child[c] = prims.len() as u32;
+                node.count[c] = *count;
+                let leaf = &info[*offset as usize..(*offset + *count) as usize];
+                let is_sphere = |p: &&PrimInfo| p.id & PRIM_SPHERE_BIT != 0;
+                prims.extend(leaf.iter().filter(|p| !is_sphere(p)).map(|p| p.id));
+                prims.extend(leaf.iter().filter(is_sphere).map(|p| p.id));
+            }
+            Built::Interior { .. } => {
+                node.child[c] = flatten(kid, info, nodes, prims);
+                node.count[c] = 0;
+            }
+        }
+    }
+    nodes[index] = node;
+    index as u32
+}
+
+/// Below this many primitives a subtree is built on the calling thread; above it the two
+/// children are built in parallel (`rayon::join`). The tree is the same either way: each
+/// subtree's build depends only on its own primitives.
+const PARALLEL_BUILD: usize = 4096;
+
+/// Builds the subtree over `info` (which starts at entry `start` of the whole array), reordering
+/// `info` so that every leaf's primitives are contiguous.
+fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
+    let mut bounds = Aabb::EMPTY;
+    let mut cbounds = Aabb::EMPTY;
+    for p in info.iter() {
+        bounds.grow(&p.bounds);
+        cbounds.grow_point(p.centroid);
+    }
+    let count = info.len();
+    let leaf = Built::Leaf {
+        bounds,
+        offset: start as u32,
+        count: count as u32,
+    };
+    if count <= 1 || depth >= MAX_DEPTH {
+        return leaf;
+    }
+
+    // Choose the split: the cheapest bucket boundary over all three axes by the surface area
+    // heuristic, cost = C_trav + (N_l A_l + N_r A_r) / A (MacDonald and Booth 1990).
+    let extent = cbounds.max - cbounds.min;
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bucket boundary)
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        let bucket_of = |c: Vec3| {
+            let b = ((c[axis] - cbounds.min[axis]) / extent[axis] * BINS as f32) as usize;
+            b.min(BINS - 1)
+        };
+        let mut counts = [0usize; BINS];
+        let mut boxes = [Aabb::EMPTY; BINS];
+        for p in info.iter() {
+            let b = bucket_of(p.centroid);
+            counts[b] += 1;
+            boxes[b].grow(&p.bounds);
+        }
+        // Sweep from the right to get the cost of each boundary's right side, then from the left.
+        let mut right_cost = [0.0f32; BINS];
+        let (mut acc, mut n) = (Aabb::EMPTY, 0usize);
+        for b in (1..BINS).rev() {
+            acc.grow(&boxes[b]);
+            n += counts[b];
+            right_cost[b] = n as f32 * acc.area();
+        }
+        let (mut acc, mut n) = (Aabb::EMPTY, 0usize);
+        for b in 1..BINS {
+            acc.grow(&boxes[b - 1]);
+            n += counts[b - 1];
+            if n == 0 || n == count {
+                continue;
+            }
+            let cost = TRAVERSAL_COST + (n as f32 * acc.area() + right_cost[b]) / bounds.area();
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b));
+            }
+        }
+    }
+
+    let mid = match best {
+        Some((cost, axis, boundary)) => {
+            if count <= MAX_LEAF && cost >= count as f32 {
+                return leaf;
+            }
+            let (lo, ext) = (cbounds.min[axis], extent[axis]);
+            partition(info, |p| {
+                let b = ((p.centroid[axis] - lo) / ext * BINS as f32) as usize;
+                b.min(BINS - 1) < boundary
+            })
+        }
+        None => {
+            // All centroids coincide: no split separates anything, so halve by index.
+            if count <= MAX_LEAF {
+                return leaf;
+            }
+            count / 2
+        }
+    };
+    let (left, right) = info.split_at_mut(mid);
+    let (first, second) = if count > PARALLEL_BUILD {
+        rayon::join(
+            || build_node(left, start, depth + 1),
+            || build_node(right, start + mid, depth + 1),
+        )
+    } else {
+        (
+            build_node(left, start, depth + 1),
+            build_node(right, start + mid, depth + 1),
+        )
+    };
+    Built::Interior {
+        bounds,
+        children: Box::new([first, second]),
+    }
+}
+
+/// The number of nodes on the longest path from the root.
+pub fn depth(nodes: &[BvhNode]) -> usize {
+    fn walk(nodes: &[BvhNode], i: usize) -> usize {
+        let n = &nodes[i];
+        1 + (0..4)
+            .filter(|&c| n.count[c] == 0)
+            .map(|c| walk(nodes, n.child[c] as usize))
+            .max()
+            .unwrap_or(0)
+    }
+    if nodes.is_empty() {
+        0
+    } else {
+        walk(nodes, 0)
+    }
+}
+
+/// A bound on the traversal stack: it holds children pushed by the ancestors of the node being
+/// visited, at most three per node, so never more than three per level.
+pub fn stack_size(nodes: &[BvhNode]) -> usize {
+    3 * depth(nodes)
+}
+
+/// In-place partition; returns the number of elements for which `pred` holds (moved first).
+fn partition(v: &mut [PrimInfo], pred: impl Fn(&PrimInfo) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..v.len() {
+        if pred(&v[j]) {
+            v.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+/// The primitive a traversal found nearest so far, before its surface point is computed
+/// ([`surface_hit`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Candidate {
+    pub t: f32,
+    pub prim: u32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+/// Closest-hit mode: the nearest intersection with `t` in (its error bound, `t_max`); of hits
+/// at the same t (a ray through an edge two triangles share), the one of the lower primitive id
+/// ([`nearer`]).
+pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+    let mut best: Option<Candidate> = None;
+    traverse(scene, ray, t_max, |prim, t, _t_err, b1, b2, t_limit| {
+        if nearer(t, prim, *t_limit, best) {
+            *t_limit = t;
+            best = Some(Candidate { t, prim, b1, b2 });
+        }
+        false
+    });
+    let c = best?;
+    Some(surface_hit(scene, ray, c))
+}
+
+/// Whether a hit at `t` on primitive `prim` (its id as `prims` holds it: a triangle's index, or
+/// a sphere's with the sphere bit) replaces `best`, the nearest so far (`t_limit` its t, or the
+/// ray's end): nearer, or as near and of a lower id. The scalar traversal, the packets of
+/// [`crate::accel::packet`] and `shaders/bvh.wgsl` visit nodes in different orders; with this rule they
+/// keep the same primitive of two met at the same t. One case remains: once the first sets
+/// `t_limit`, a leaf whose box's entry distance rounds above that t is skipped, so where the
+/// other lies in such a leaf the order still decides.
+#[inline]
+pub(crate) fn nearer(t: f32, prim: u32, t_limit: f32, best: Option<Candidate>) -> bool {
+    t < t_limit || (t == t_limit && best.is_some_and(|b| prim < b.prim))
+}
+
+/// Any-hit mode, for shadow rays: is anything within the open segment (0, `t_max`)? A hit within
+/// its own error bound of `t_max` does not count, since the segment ends on a surface.
+pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
+    let mut hit = false;
+    traverse(scene, ray, t_max, |_prim, t, t_err, _b1, _b2, t_limit| {
+        if t < *t_limit - t_err {
+            hit = true;
+        }
+        hit
+    });
+    #[cfg(feature = "counters")]
+    counters::last_was_shadow();
+    hit
+}
+
+/// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared
+/// four-wide tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the
+/// four-wide tree it is made of, docs/performance.md). At each node the children's boxes are
+/// tested at once. The leaves among the hit children are tested first, so that their hits
+/// lower t_limit before anything is pushed; then the nearest hit interior child is visited next and the others are
+/// pushed with their entry distances: a missed child is never pushed and a pushed one that a
+/// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
+/// distance: sorting all four was measured slower (the keys' lanes travel through memory) for
+/// the little culling it adds (docs/performance.md). A leaf's triangles are tested four at a
+/// time ([`intersect_triangles4`], bit for bit the scalar test per lane; 15 – 18 % less render
+/// time than one at a time, docs/performance.md) and their hits reported in entry order, so the
+/// result is the scalar traversal's. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
+/// what a hit means; it returns true to stop at once (any-hit).
+#[inline]
+fn traverse(
+    scene: &FlatScene,
+    ray: &Ray,
+    t_max: f32,
+    mut on_hit: impl FnMut(u32, f32, f32, f32, f32, &mut f32) -> bool,
+) {
+    let inv_d = safe_inverse(ray.d);
+    let ray4 = Ray4::new(ray);
+    let mut t_limit = t_max;
+    #[cfg(feature = "counters")]
+    let _work = counters::Ray::start();
+    // Interior children still to visit, with the distance at which the ray enters them.
+    let mut stack = ArrayVec::<(u32, f32), WIDE_STACK_SIZE>::new();
+    let mut current = 0u32;
+    loop {
+        let node = &scene.wide[current as usize];
+        #[cfg(feature = "counters")]
+        counters::node();
+        let (t_enter, entered) = intersect_wide(node, ray.o, inv_d, t_limit);
+        // Bit c set: the ray enters child c's box (a leaf's in `leaves`, a node's in `inner`).
+        let mut interior = 0u32;
+        for (c, &count) in node.count.iter().enumerate() {
+            interior |= u32::from(count == 0) << c;
+        }
+        let (mut leaves, mut inner) = (entered & !interior, entered & interior);
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize;
+            leaves &= leaves - 1;
+            // A box that a hit in another leaf has since passed.
+            if t_enter[c] > t_limit {
+                continue;
+            }
+            // The leaf's entries of `prims` start at a multiple of four (`flatten`), so pack
+            // k / 4 holds entries k..k + 4: its triangles are tested at once, in lane (= entry)
+            // order, then its spheres, which follow a leaf's triangles.
+            let (first, end) = (
+                node.child[c] as usize,
+                (node.child[c] + node.count[c]) as usize,
+            );
+            debug_assert!(first % 4 == 0, "a leaf starts at a multiple of four");
+            #[cfg(feature = "counters")]
+            counters::primitives(node.count[c]);
+            for k in (first..end).step_by(4) {
+                let pack = &scene.packs[k / 4];
+                let hits = if pack.triangles != 0 {
+                    intersect_triangles4(&ray4, pack)
+                } else {
+                    TriangleHits4::MISS
+                };
+                let mut lanes = hits.mask;
+                while lanes != 0 {
+                    let l = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let prim = scene.prims[k + l];
+                    if on_hit(
+                        prim,
+                        hits.t[l],
+                        hits.t_err[l],
+                        hits.b1[l],
+                        hits.b2[l],
+                        &mut t_limit,
+                    ) {
+                        return;
+                    }
+                }
+                let mut lanes = pack.spheres;
+                while lanes != 0 {
+                    let l = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let prim = scene.prims[k + l];
+                    let s = &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize];
+                    if let Some(h) = intersect_sphere(ray, s) {
+                        if on_hit(prim, h.t, h.t_err, 0.0, 0.0, &mut t_limit) {
+                            return;
+                        }
+                    }
+                }
+            }
+        }
+        let mut next: Option<(u32, f32)> = None;
+        while inner != 0 {
+            let c = inner.trailing_zeros() as usize;
+            inner &= inner - 1;
+            if t_enter[c] > t_limit {
+                continue;
+            }
+            let child = (node.child[c], t_enter[c]);
+            match next {
+                Some(n) if n.1 <= child.1 => stack.push(child),
+                Some(n) => {
+                    stack.push(n);
+                    next = Some(child);
+                }
+                None => next = Some(child),
+            }
+        }
+        // Descend into the nearest interior child, or pop the most recently pushed one that the
+        // ray still enters before t_limit.
+        while next.is_none() {
+            match stack.pop() {
+                Some((n, t)) if t <= t_limit => next = Some((n, t)),
+                Some(_) => {}
+                None => return,
+            }
+        }
+        current = next.map_or(0, |(n, _)| n);
+    }
+}
+
+/// Work counters of the traversal (feature `counters`, for `examples/lane_occupancy.rs`): per
+/// ray traced on this thread, the nodes visited and the primitives tested, the units of work
+/// that `shaders/bvh.wgsl`'s loops take one at a time (the CPU tests a leaf's triangles four at
+/// a time, but counts them one by one here, as the shader takes them).
+#[cfg(feature = "counters")]
+pub mod counters {
+    use std::cell::{Cell, RefCell};
+
+    /// One ray's work.
+    #[derive(Clone, Copy, Debug, Default)]
+    pub struct Work {
+        pub nodes: u32,
+        pub primitives: u32,
+        /// An any-hit (shadow) ray rather than a closest-hit one.
+        pub shadow: bool,
+    }
+
+    thread_local! {
+        static CURRENT: Cell<Work> = const { Cell::new(Work {
+            nodes: 0,
+            primitives: 0,
+            shadow: false,
+        }) };
+        static LOG: RefCell<Vec<Work>> = const { RefCell::new(Vec::new()) };
+    }
+
+    /// Counts one ray from its creation to its drop, when its work goes to the log.
+    pub(super) struct Ray;
+    impl Ray {
+        pub(super) fn start() -> Ray {
+            CURRENT.with(|c| c.set(Work::default()));
+            Ray
+        }
+    }
+    impl Drop for Ray {
+        fn drop(&mut self) {
+            let w = CURRENT.with(|c| c.get());
+            LOG.with(|l| l.borrow_mut().push(w));
+        }
+    }
+    pub(super) fn node() {
+        CURRENT.with(|c| {
+            c.set(Work {
+                nodes: c.get().nodes + 1,
+                ..c.get()
+            })
+        });
+    }
+    pub(super) fn primitives(n: u32) {
+        CURRENT.with(|c| {
+            let w = c.get();
+            c.set(Work {
+                primitives: w.primitives + n,
+                ..w
+            })
+        });
+    }
+    pub(super) fn last_was_shadow() {
+        LOG.with(|l| {
+            if let Some(w) = l.borrow_mut().last_mut() {
+                w.shadow = true;
+            }
+        });
+    }
+    /// The work of the rays traced on this thread since the last call, in the order traced.
+    pub fn take() -> Vec<Work> {
+        LOG.with(|l| std::mem::take(&mut *l.borrow_mut()))
+    }
+}
+
+pub(crate) fn surface_hit(scene: &FlatScene, ray: &Ray, c: Candidate) -> SurfaceHit {
+    if c.prim & PRIM_SPHERE_BIT == 0 {
+        let tri = &scene.triangles[c.prim as usize];
+        let (p, p_err) = triangle_hit_point(tri, c.b1, c.b2);
+        SurfaceHit {
+            t: c.t,
+            p,
+            p_err,
+            n: triangle_normal(tri),
+            material: tri.material,
+            prim: c.prim,
+        }
+    } else {
+        let s = &scene.spheres[(c.prim & !PRIM_SPHERE_BIT) as usize];
+        let (p, p_err, n) = sphere_point(ray, s, c.t);
+        SurfaceHit {
+            t: c.t,
+            p,
+            p_err,
+            n,
+            material: s.material,
+            prim: c.prim,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::geometry::intersect_triangle;
+
+    fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
+        Triangle::new(a, b, c, 0)
+    }
+
+    /// A uniform number in [0, 1) for test data: number `k` of item `i` of stream `stream`.
+    fn rnd(stream: u32, i: u32, k: u32) -> f32 {
+        crate::math::sampling::u32_to_unit_f32(
+            crate::math::sampling::pcg4d([i, k, stream, stream + 1])[0],
+        )
+    }
+
+    /// `n` triangles of stream `stream`, each within a unit cube (moved by `shift`) of a centre
+    /// uniform in [0, spread)³.
+    fn triangle_soup(n: u32, stream: u32, spread: f32, shift: f32) -> Vec<Triangle> {
+        (0..n)
+            .map(|i| {
+                let c = Vec3::new(rnd(stream, i, 0), rnd(stream, i, 1), rnd(stream, i, 2)) * spread;
+                let v = |k| {
+                    (c + Vec3::new(
+                        rnd(stream, i, k),
+                        rnd(stream, i, k + 1),
+                        rnd(stream, i, k + 2),
+                    ) + shift)
+                        .into()
+                };
+                tri(v(3), v(6), v(9))
+            })
+            .collect()
+    }
+
+    /// `stack_size` bounds the traversal stack: checked against the largest stack the
+    /// traversal's pushes reach over every node of a tree of 500 triangles.
+    #[test]
+    fn stack_size_bounds_the_traversal_stack() {
+        let tris = triangle_soup(500, 3, 20.0, 0.0);
+        let (nodes, _) = build(&tris, &[]);
+        let bound = stack_size(&nodes);
+        // Replay the traversal's pushes with every box hit (the worst case): each node pushes
+        // all its interior children but one.
+        let mut worst = 0;
+        let mut stack = vec![];
+        let mut current = 0usize;
+        let mut visits = 0;
+        loop {
+            visits += 1;
+            let node = &nodes[current];
+            let mut next = None;
+            for c in 0..4 {
+                if node.count[c] == 0 {
+                    if let Some(n) = next.replace(node.child[c] as usize) {
+                        stack.push(n);
+                        worst = worst.max(stack.len());
+                    }
+                }
+            }
+            match next.or_else(|| stack.pop()) {
+                Some(n) => current = n,
+                None => break,
+            }
+        }
+        assert_eq!(visits, nodes.len(), "every node is visited once");
+        assert!(worst <= bound, "stack reached {worst}, bound {bound}");
+        assert!(bound <= STACK_SIZE);
+    }
+
+    /// Every primitive is in exactly one leaf, and every child box contains its primitives.
+    #[test]
+    fn leaves_partition_the_primitives_inside_their_boxes() {
+        let tris = triangle_soup(300, 5, 10.0, 0.0);
+        let (nodes, prims) = build(&tris, &[]);
+        let mut seen = vec![0; tris.len()];
+        for n in &nodes {
+            for c in 0..4 {
+                if n.count[c] == 0 || n.count[c] == EMPTY_SLOT {
+                    continue;
+                }
+                let (lo, hi) = n.child_bounds(c);
+                for k in n.child[c]..n.child[c] + n.count[c] {
+                    let t = &tris[prims[k as usize] as usize];
+                    seen[prims[k as usize] as usize] += 1;
+                    for v in [t.v0, t.v1, t.v2] {
+                        let v = Vec3::from(v);
+                        assert!(v.cmpge(lo).all() && v.cmple(hi).all());
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&k| k == 1));
+    }
+
+    /// Brute force over every primitive: the nearest hit's t, and whether anything blocks the
+    /// segment (0, t_max) the way `occluded` decides it (a hit within its error bound of t_max
+    /// does not count).
+    fn brute_force(tris: &[Triangle], spheres: &[Sphere], ray: &Ray, t_max: f32) -> (f32, bool) {
+        let mut hits: Vec<(f32, f32)> = tris
+            .iter()
+            .filter_map(|t| intersect_triangle(ray, t).map(|h| (h.t, h.t_err)))
+            .collect();
+        hits.extend(
+            spheres
+                .iter()
+                .filter_map(|s| intersect_sphere(ray, s).map(|h| (h.t, h.t_err))),
+        );
+        let nearest = hits.iter().map(|h| h.0).fold(f32::INFINITY, f32::min);
+        (nearest, hits.iter().any(|&(t, e)| t < t_max - e))
+    }
+
+    fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
+        let (nodes, prims) = build(&tris, &spheres);
+        FlatScene::from_tree(tris, spheres, nodes, prims)
+    }
+
+    /// The scene's nearest hit along `ray` and whether it blocks the segment (0, 1) are what
+    /// testing every primitive of `tris` and `spheres` gives.
+    fn assert_ray_agrees(
+        scene: &FlatScene,
+        tris: &[Triangle],
+        spheres: &[Sphere],
+        ray: &Ray,
+        what: &str,
+    ) {
+        let (nearest, _) = brute_force(tris, spheres, ray, f32::INFINITY);
+        let got = intersect_closest(scene, ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+        assert_eq!(got, nearest, "{what}");
+        assert_eq!(
+            occluded(scene, ray, 1.0),
+            brute_force(tris, spheres, ray, 1.0).1,
+            "{what}"
+        );
+    }
+
+    /// The BVH must find exactly what testing every primitive finds: the nearest hit, and for
+    /// shadow segments of every length whether anything blocks them.
+    #[test]
+    fn bvh_agrees_with_brute_force() {
+        let rnd = |i, k| rnd(1, i, k);
+        let tris = triangle_soup(300, 1, 10.0, -0.5);
+        let spheres = vec![Sphere {
+            center: [5.0, 5.0, 5.0],
+            radius: 1.0,
+            ..Default::default()
+        }];
+        let scene = scene_of(tris.clone(), spheres.clone());
+        for i in 0..2000u32 {
+            let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 10.0;
+            let mut d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+            // Every fourth ray along an axis (two direction components exactly 0).
+            if i % 4 == 0 {
+                let axis = (i / 4 % 3) as usize;
+                let mut a = Vec3::ZERO;
+                a[axis] = if d[axis] < 0.0 { -1.0 } else { 1.0 };
+                d = a;
+            }
+            let ray = Ray { o, d };
+            let got = intersect_closest(&scene, &ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+            assert_eq!(
+                got,
+                brute_force(&tris, &spheres, &ray, f32::INFINITY).0,
+                "ray {i}"
+            );
+            // Shadow segments ending before, at and after the nearest hit.
+            for t_max in [0.5 * got, got, 2.0 * got, 1.0, 3.0] {
+                if !t_max.is_finite() {
+                    continue;
+                }
+                assert_eq!(
+                    occluded(&scene, &ray, t_max),
+                    brute_force(&tris, &spheres, &ray, t_max).1,
+                    "ray {i}, t_max {t_max}"
+                );
+            }
+        }
+    }
+
+    /// A leaf larger than four primitives (the depth limit makes them), triangles and spheres
+    /// mixed, spans several packs: the traversal tests all of it, the spheres after the
+    /// triangles, and finds what testing every primitive finds.
+    #[test]
+    fn a_leaf_of_many_packs_agrees_with_brute_force() {
+        let rnd = |i, k| rnd(9, i, k);
+        let tris = triangle_soup(11, 9, 4.0, -0.5);
+        let spheres: Vec<Sphere> = (0..3u32)
+            .map(|i| Sphere {
+                center: [rnd(i, 30) * 4.0, rnd(i, 31) * 4.0, rnd(i, 32) * 4.0],
+                radius: 0.5,
+                ..Default::default()
+            })
+            .collect();
+        let info: Vec<PrimInfo> = (0..14u32)
+            .map(|i| PrimInfo {
+                bounds: Aabb {
+                    min: Vec3::splat(-2.0),
+                    max: Vec3::splat(6.0),
+                },
+                centroid: Vec3::ZERO,
+                // Spheres first in the builder's order, so the flattening must move them.
+                id: if i < 3 { i | PRIM_SPHERE_BIT } else { i - 3 },
+            })
+            .collect();
+        let leaf = Built::Leaf {
+            bounds: info[0].bounds,
+            offset: 0,
+            count: 14,
+        };
+        let (nodes, prims) = flatten_root(&leaf, &info, Vec::new());
+        assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
+        assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
+        let scene = FlatScene::from_tree(tris.clone(), spheres.clone(), nodes, prims);
+        for i in 0..2000u32 {
+            let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 4.0;
+            let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+            assert_ray_agrees(&scene, &tris, &spheres, &Ray { o, d }, &format!("ray {i}"));
+        }
+    }
+
+    /// Scenes of one to four primitives (whose root the SAH may leave a leaf) and an empty one.
+    #[test]
+    fn small_scenes_agree_with_brute_force() {
+        let rnd = |i, k| rnd(7, i, k);
+        for n in 0..=4u32 {
+            let tris: Vec<Triangle> = (0..n)
+                .map(|i| {
+                    let v = |k| (Vec3::new(rnd(i, k), rnd(i, k + 1), rnd(i, k + 2)) * 2.0).into();
+                    tri(v(0), v(3), v(6))
+                })
+                .collect();
+            let scene = scene_of(tris.clone(), vec![]);
+            for i in 0..500u32 {
+                let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 2.0 - 0.5;
+                let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;
+                let what = format!("{n} triangles, ray {i}");
+                assert_ray_agrees(&scene, &tris, &[], &Ray { o, d }, &what);
+            }
+        }
+    }
+}

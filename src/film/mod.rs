@@ -1,0 +1,194 @@
+//! The film: per-pixel sums of samples and of their squares, so that every image carries its own
+//! standard error.
+//!
+//! A pixel's estimate is the sample mean m = Σx / n, and the variance of that mean is estimated
+//! without bias by (Σx² − (Σx)²/n) / (n (n − 1)). Sums are kept in f64: at 10^5 samples an f32
+//! sum has lost about 17 of its 24 bits to the magnitude of the running total.
+
+use glam::Vec3;
+
+pub mod file;
+pub mod output;
+pub mod parts;
+pub mod provenance;
+
+/// The accumulated samples of one pixel. A sample that is not finite is counted in `dropped` and
+/// contributes nothing else: one NaN must not erase a pixel's other samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelStats {
+    pub sum: [f64; 3],
+    pub sum_sq: [f64; 3],
+    /// Samples that were accumulated.
+    pub n: u64,
+    /// Samples that were not finite and were dropped.
+    pub dropped: u64,
+}
+
+impl PixelStats {
+    /// Adds one sample, or counts it as dropped when any channel is NaN or infinite.
+    #[inline]
+    pub fn add(&mut self, x: Vec3) {
+        if !x.is_finite() {
+            self.dropped += 1;
+            return;
+        }
+        for c in 0..3 {
+            let v = x[c] as f64;
+            self.sum[c] += v;
+            self.sum_sq[c] += v * v;
+        }
+        self.n += 1;
+    }
+
+    /// Folds in another set of sums (a later batch of samples of the same pixel).
+    #[inline]
+    pub fn merge(&mut self, o: &PixelStats) {
+        for c in 0..3 {
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
+        }
+        self.n += o.n;
+        self.dropped += o.dropped;
+    }
+
+    pub fn mean(&self) -> [f64; 3] {
+        if self.n == 0 {
+            return [0.0; 3];
+        }
+        self.sum.map(|s| s / self.n as f64)
+    }
+
+    /// The estimated variance of the mean (the squared standard error), per channel.
+    pub fn var_of_mean(&self) -> [f64; 3] {
+        if self.n < 2 {
+            return [0.0; 3];
+        }
+        let n = self.n as f64;
+        std::array::from_fn(|c| {
+            let ss = self.sum_sq[c] - self.sum[c] * self.sum[c] / n;
+            ss.max(0.0) / (n * (n - 1.0))
+        })
+    }
+}
+
+/// A whole image of pixel statistics, row 0 at the top.
+///
+/// Methods that splat light subpaths into the pixels they are seen in (light tracing, BDPT) make
+/// the pixels of one iteration dependent: one light subpath adds to several pixels. Their
+/// samples are *batch means*: an iteration, which traces one light subpath per pixel and one
+/// camera subpath per pixel, is one independent estimate of the whole image, and each pixel
+/// adds its value of that iteration as one sample, so the per-pixel statistics stay right. The
+/// image mean's standard error cannot then be summed over pixels; it comes from the scatter of
+/// the iterations' own image means, which such methods record in `iteration_means`.
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<PixelStats>,
+    /// The image mean of each iteration, one sample per iteration, where pixels share samples
+    /// (`Some` for light tracing and BDPT; `None` where pixels are independent).
+    pub iteration_means: Option<PixelStats>,
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Film {
+        Film {
+            width,
+            height,
+            pixels: vec![PixelStats::default(); (width * height) as usize],
+            iteration_means: None,
+        }
+    }
+
+    /// A film for a method whose pixels share samples within an iteration (see the type).
+    pub fn with_iteration_means(width: u32, height: u32) -> Film {
+        Film {
+            iteration_means: Some(PixelStats::default()),
+            ..Film::new(width, height)
+        }
+    }
+
+    /// Samples per pixel taken so far (accumulated + dropped), the same for every pixel.
+    pub fn spp(&self) -> u64 {
+        self.pixels.first().map_or(0, |p| p.n + p.dropped)
+    }
+
+    pub fn dropped(&self) -> u64 {
+        self.pixels.iter().map(|p| p.dropped).sum()
+    }
+
+    /// Per-pixel means as f32 RGB, for outputs.
+    pub fn mean_image(&self) -> Vec<[f32; 3]> {
+        self.pixels
+            .iter()
+            .map(|p| p.mean().map(|x| x as f32))
+            .collect()
+    }
+
+    /// Per-pixel variance of the mean as f32 RGB, for outputs.
+    pub fn variance_image(&self) -> Vec<[f32; 3]> {
+        self.pixels
+            .iter()
+            .map(|p| p.var_of_mean().map(|x| x as f32))
+            .collect()
+    }
+
+    /// The mean over all pixels, and its standard error. Where pixels are independent
+    /// estimates, the variance of their average is the sum of their variances over N²; where
+    /// they share samples (`iteration_means`), it is the variance of the mean of the
+    /// iterations' image means (batch means).
+    pub fn image_mean(&self) -> ([f64; 3], [f64; 3]) {
+        let n = self.pixels.len() as f64;
+        let mut m = [0.0; 3];
+        let mut v = [0.0; 3];
+        for p in &self.pixels {
+            let (pm, pv) = (p.mean(), p.var_of_mean());
+            for c in 0..3 {
+                m[c] += pm[c];
+                v[c] += pv[c];
+            }
+        }
+        let se = match &self.iteration_means {
+            Some(batches) => batches.var_of_mean().map(f64::sqrt),
+            None => v.map(|x| x.sqrt() / n),
+        };
+        (m.map(|x| x / n), se)
+    }
+}
+
+/// Refuses to add samples of `method` to a film that holds another kind: a film of a splatting
+/// method keeps the iterations' image means (batch means) and one of path tracing does not.
+pub fn check_film_for(method: crate::transport::method::Method, film: &Film) -> anyhow::Result<()> {
+    if film.spp() > 0 && film.iteration_means.is_some() != method.splats() {
+        anyhow::bail!(
+            "this film holds samples of another kind of method than {method}; render into a new film"
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variance_of_mean_is_the_unbiased_estimate() {
+        let mut p = PixelStats::default();
+        for x in [1.0f32, 2.0, 3.0, 4.0] {
+            p.add(Vec3::splat(x));
+        }
+        // Sample variance of 1..4 is 5/3; of the mean of 4 samples, 5/12.
+        assert!((p.var_of_mean()[0] - 5.0 / 12.0).abs() < 1e-12);
+        assert_eq!(p.mean()[1], 2.5);
+    }
+
+    #[test]
+    fn non_finite_samples_are_counted_and_dropped() {
+        let mut p = PixelStats::default();
+        p.add(Vec3::ONE);
+        p.add(Vec3::new(f32::NAN, 0.0, 0.0));
+        p.add(Vec3::new(0.0, f32::INFINITY, 0.0));
+        assert_eq!((p.n, p.dropped), (1, 2));
+        assert_eq!(p.mean(), [1.0; 3]);
+    }
+}

@@ -1,0 +1,28 @@
+//! What an image of a bidirectional method says of the choices behind it, for the EXR metadata
+//! and the log: BDPT's τ and specular camera subpaths, the merging methods' radius schedule.
+
+/// BDPT's choices for a render's provenance: τ of the Russian roulette on visibility rays, and
+/// how many pixels trace several camera subpaths per iteration.
+pub fn bidirectional_provenance(
+    shadow_threshold: f32,
+    specular_camera_subpaths: u32,
+    specular_pixels: usize,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("shadow_rr_threshold", format!("{shadow_threshold:e}")),
+        (
+            "specular_camera_subpaths",
+            format!("{specular_camera_subpaths} in {specular_pixels} pixels"),
+        ),
+    ]
+}
+
+/// The merging methods' radius for a render's provenance: r_1 (scene units) and α.
+pub fn merging_provenance(
+    radius: &crate::transport::merging::MergeRadius,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("merge_radius", format!("{:e}", radius.initial)),
+        ("merge_alpha", format!("{}", radius.alpha)),
+    ]
+}

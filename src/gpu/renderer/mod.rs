@@ -1,0 +1,421 @@
+//! The GPU backend's work: upload the flattened scene as it is, compile the path-tracing
+//! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
+
+mod iterations;
+
+use super::bidirectional::Bidirectional;
+use super::frame::{Frame, PixelSums, MAX_PASS_SPP, TARGET_DISPATCH_SECONDS, WORKGROUP};
+use super::limits::{array_lengths, check_scene_fits, largest_binding, PIXEL_SUMS_BYTES};
+use super::pipeline::{bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload};
+use super::shader::Residency;
+use crate::film::Film;
+use crate::layout::FlatScene;
+use crate::transport::camera::Camera;
+use crate::transport::faults::Faults;
+use crate::transport::method::Method;
+use anyhow::{anyhow, bail, Context, Result};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// How the kernel is compiled: with naga's runtime checks (bounds checks and loop bounding,
+/// wgpu's default since 25) or without (`create_shader_module_trusted`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Checks {
+    Checked,
+    Unchecked,
+}
+
+/// The GPU renderer for one scene, camera, seed and method.
+pub struct GpuRenderer {
+    pub(super) device: wgpu::Device,
+    pub(super) queue: wgpu::Queue,
+    /// Path tracing's kernel (None for light tracing and BDPT).
+    pipeline: Option<wgpu::ComputePipeline>,
+    pub(super) bind_group: wgpu::BindGroup,
+    pub(super) frame_buffer: wgpu::Buffer,
+    pub(super) sums: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
+    /// Image rows per film band: the pass sums of path tracing cover this many rows at a time,
+    /// so that any image renders within the device's largest binding; the whole image for the
+    /// other methods (`check_image_fits`).
+    film_rows: u32,
+    pub(super) frame: Frame,
+    pub(super) method: Method,
+    /// Light tracing and BDPT: their kernels and buffers.
+    pub(super) bidirectional: Option<Bidirectional>,
+    /// The dispatch size, in camera paths, that should take about TARGET_DISPATCH_SECONDS;
+    /// measured and updated after every pass.
+    pub(super) paths_per_dispatch: u64,
+    lost: Arc<(AtomicBool, Mutex<String>)>,
+    #[cfg(feature = "stage-times")]
+    pub(super) stage_times: super::stage_times::StageTimes,
+}
+
+#[cfg(feature = "stage-times")]
+impl Drop for GpuRenderer {
+    fn drop(&mut self) {
+        if !self.stage_times.is_empty() {
+            eprintln!("{} {}", self.method, self.stage_times.report());
+        }
+    }
+}
+
+impl GpuRenderer {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &FlatScene,
+        camera: Camera,
+        seed: u32,
+        faults: Faults,
+        checks: Checks,
+        residency: Residency,
+        method: Method,
+        shadow_threshold: f32,
+    ) -> Result<GpuRenderer> {
+        // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
+        check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
+        let (width, height) = (camera.width, camera.height);
+        let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));
+        {
+            let lost = lost.clone();
+            device.set_device_lost_callback(move |reason, msg| {
+                *lost.1.lock().unwrap() = format!("{reason:?}: {msg}");
+                lost.0.store(true, Ordering::SeqCst);
+            });
+        }
+
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let source = super::shader::source(residency, array_lengths(scene));
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some("hexray path tracer"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        let module = match checks {
+            Checks::Checked => device.create_shader_module(desc),
+            // SAFETY: the kernel's loops all terminate (BVH traversal visits each node at most
+            // once; the path loop ends by Russian roulette with probability >= 0.05 per bounce
+            // after bounce 3; the sample loop is counted), and every index is in bounds by
+            // construction (node, primitive and material indices come from the flattened scene,
+            // pixel indices are checked against the tile).
+            Checks::Unchecked => unsafe {
+                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+            },
+        };
+        let layout = bind_group_layout(device, residency);
+        let (pipeline, bidirectional) = if method.splats() {
+            let b = Bidirectional::new(
+                device,
+                &module,
+                &layout,
+                method,
+                scene,
+                &camera,
+                faults.merge_kernel_ball,
+            )?;
+            (None, Some(b))
+        } else {
+            (
+                Some(compute_pipeline(device, &module, &[&layout], "render")),
+                None,
+            )
+        };
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("the GPU rejected the {method} kernel: {e}");
+        }
+
+        let frame = Frame {
+            camera,
+            seed,
+            first_sample: 0,
+            sample_count: 0,
+            num_emitters: scene.emitters.len() as u32,
+            tile_origin: [0, 0],
+            tile_size: [width, height],
+            max_bounces: faults.max_bounces,
+            specular_scale: faults.specular_scale,
+            light_samples: 1,
+            grey_indirect: faults.grey_indirect as u32,
+            method: match method {
+                Method::Path => 0,
+                Method::Light => 1,
+                Method::Bdpt => 2,
+                Method::Sppm => 3,
+                Method::Vcm => 4,
+                Method::VcmFull => 5,
+            },
+            n_light_paths: width * height,
+            slot: 0,
+            vertex_capacity: bidirectional.as_ref().map_or(0, |b| b.capacity),
+            path_origin: 0,
+            path_count: 0,
+            importance_missing_cos: faults.importance_missing_cos as u32,
+            shadow_threshold,
+            merge_vm: 0.0,
+            merge_vc: 0.0,
+            merge_normalization: 0.0,
+            film_row: 0,
+            film_rows: height,
+            band_pixels: width * height,
+            wave_origin: 0,
+            continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
+            merge_rr_threshold: if matches!(method, Method::Vcm | Method::VcmFull) {
+                crate::transport::subpath::MERGE_RR_THRESHOLD
+            } else {
+                0.0
+            },
+            merge_rr_undivided: faults.merge_rr_undivided as u32,
+            planar_mirror_count: scene.planar_mirrors.len() as u32,
+            camera_goes_on: 1,
+            merge_radius: 0.0,
+            // Whether the method merges within the clearance; the iteration clears it where it
+            // does not merge (`Bidirectional`).
+            merges_within_clearance: (method.merges_within_clearance()
+                && !faults.merge_ignores_clearance) as u32,
+            clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
+            pad0: 0,
+            planar_mirrors: std::array::from_fn(|i| {
+                scene.planar_mirrors.get(i).copied().unwrap_or_default()
+            }),
+        };
+        let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: bytemuck::bytes_of(&frame),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        // Path tracing's film bands: as many rows as one binding holds (`check_image_fits` has
+        // made sure a row fits, and for the other methods the whole image).
+        let film_rows = if let Some(b) = &bidirectional {
+            b.band_rows
+        } else {
+            (largest_binding(&device.limits()) / (width as u64 * PIXEL_SUMS_BYTES))
+                .clamp(1, height as u64) as u32
+        };
+        let sums_size = film_rows as u64 * width as u64 * PIXEL_SUMS_BYTES;
+        let sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel sums"),
+            size: sums_size,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel sums readback"),
+            size: sums_size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let buffers = [
+            upload(device, residency, "triangles", &scene.triangles),
+            upload(device, residency, "spheres", &scene.spheres),
+            upload(device, residency, "materials", &scene.materials),
+            upload(device, residency, "emitters", &scene.emitters),
+            upload(device, residency, "bvh nodes", &scene.nodes),
+            upload(device, residency, "primitive refs", &packed_prims(scene)),
+        ];
+        let mut entries = buffer_entries(buffers.iter());
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: frame_buffer.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: sums.as_entire_binding(),
+        });
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &layout,
+            entries: &entries,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("binding the scene failed: {e}");
+        }
+        Ok(GpuRenderer {
+            device: device.clone(),
+            queue: queue.clone(),
+            pipeline,
+            bind_group,
+            frame_buffer,
+            sums,
+            readback,
+            film_rows,
+            frame,
+            method,
+            bidirectional,
+            paths_per_dispatch: 1 << 16,
+            lost,
+            #[cfg(feature = "stage-times")]
+            stage_times: Default::default(),
+        })
+    }
+
+    pub(super) fn check_device(&self) -> Result<()> {
+        if self.lost.0.load(Ordering::SeqCst) {
+            bail!("the GPU device was lost ({})", self.lost.1.lock().unwrap());
+        }
+        Ok(())
+    }
+
+    /// Shadow rays per diffuse vertex (`--light-samples`; 1 unless set).
+    pub fn set_light_samples(&mut self, n: u32) {
+        self.frame.light_samples = n.max(1);
+    }
+
+    /// Adds samples `first..first + count` of every pixel to `film`. The samples are split into
+    /// passes of at most MAX_PASS_SPP, each pass into dispatches of about `paths_per_dispatch`
+    /// paths (whole rows of pixels times a number of samples); after each pass its f32 sums are
+    /// read back and folded into the f64 film. If the device fails, the film keeps every pass
+    /// completed before, and the error says what happened.
+    pub fn render(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        crate::film::check_film_for(self.method, film)?;
+        let mut done = 0;
+        while done < count {
+            let n = (count - done).min(MAX_PASS_SPP);
+            if self.method.splats() {
+                self.pass_bidirectional(first + done, n, film)?;
+            } else {
+                self.pass(first + done, n, film)?;
+            }
+            done += n;
+        }
+        Ok(())
+    }
+
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        self.check_device()?;
+        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
+        let start = Instant::now();
+        self.for_each_film_band(film, self.film_rows, |a, z| {
+            self.dispatch_band(first, count, a, z)
+        })?;
+
+        // Size the next dispatches from this pass's throughput.
+        let image = (w as u64) * (h as u64);
+        let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
+        self.paths_per_dispatch =
+            ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
+        Ok(())
+    }
+
+    /// Film bands of `rows` rows (the whole image unless its per-pixel buffers are larger than
+    /// one binding), in turn: clears the pass sums, queues `work(band_start, band_end)`, reads
+    /// the band's sums back and folds them into the film in f64.
+    pub(super) fn for_each_film_band(
+        &self,
+        film: &mut Film,
+        rows: u32,
+        mut work: impl FnMut(u32, u32),
+    ) -> Result<()> {
+        let h = self.frame.camera.height;
+        let mut band_start = 0;
+        while band_start < h {
+            let band_end = (band_start + rows).min(h);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&self.sums, 0, None);
+            self.queue.submit([encoder.finish()]);
+            work(band_start, band_end);
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
+            self.queue.submit([encoder.finish()]);
+            self.fold_sums(film, band_start, band_end - band_start)?;
+            band_start = band_end;
+        }
+        Ok(())
+    }
+
+    /// Queues samples `first..first + count` of rows `band_start..band_end` (one film band) in
+    /// dispatches of about `paths_per_dispatch` paths, each of all `count` samples over as many
+    /// rows as that allows (a multiple of the workgroup height, at least one workgroup): the
+    /// lanes then have `count` samples each to regenerate their paths with (`render` in
+    /// `shaders/path.wgsl`). On lavapipe, 256x256, 64 spp, this gave 1.4 - 1.7x the camera
+    /// paths/s of dispatches of one sample over more rows (docs/gpu.md). The smallest dispatch,
+    /// one workgroup of rows with 64 samples, can exceed the time target on a slow adapter
+    /// (about 0.5 s at 256 pixels wide on lavapipe, which has no watchdog); a real GPU's budget
+    /// holds many such dispatches.
+    fn dispatch_band(&self, first: u32, count: u32, band_start: u32, band_end: u32) {
+        let w = self.frame.camera.width;
+        let r = (self.paths_per_dispatch / (w as u64 * count.max(1) as u64)).max(1) as u32;
+        let rows = (r.div_ceil(WORKGROUP) * WORKGROUP).min(band_end - band_start);
+        let mut y = band_start;
+        while y < band_end {
+            let rows = rows.min(band_end - y);
+            let frame = Frame {
+                first_sample: first,
+                sample_count: count,
+                tile_origin: [0, y],
+                tile_size: [w, rows],
+                film_row: band_start,
+                film_rows: band_end - band_start,
+                ..self.frame
+            };
+            // One submission per dispatch: the uniform write lands before this dispatch and
+            // after the previous one.
+            self.queue
+                .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            {
+                let mut cpass = encoder.begin_compute_pass(&Default::default());
+                cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
+                cpass.set_bind_group(0, &self.bind_group, &[]);
+                cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
+            }
+            self.queue.submit([encoder.finish()]);
+            y += rows;
+        }
+    }
+
+    /// Rows per film band (tests: a band of a few rows exercises the split on a small image),
+    /// at least one and at most the buffers hold.
+    pub fn set_film_rows(&mut self, rows: u32) {
+        self.film_rows = rows.clamp(1, self.film_rows);
+        if let Some(b) = &mut self.bidirectional {
+            b.band_rows = self.film_rows;
+            b.band_pixels = self.film_rows as u64 * self.frame.camera.width as u64;
+        }
+    }
+
+    /// Reads the pass's sums back (copied to `readback` by the queued work) and folds them into
+    /// the film in f64: rows `first_row..first_row + rows`.
+    pub(super) fn fold_sums(&self, film: &mut Film, first_row: u32, rows: u32) -> Result<()> {
+        let bytes = self.read_buffer(&self.readback)?;
+        let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
+        let w = film.width as usize;
+        let band = &mut film.pixels[first_row as usize * w..(first_row + rows) as usize * w];
+        for (p, s) in band.iter_mut().zip(&sums) {
+            for c in 0..3 {
+                p.sum[c] += s.sum[c] as f64;
+                p.sum_sq[c] += s.sum_sq[c] as f64;
+            }
+            p.n += s.n as u64;
+            p.dropped += s.dropped as u64;
+        }
+        Ok(())
+    }
+
+    /// Maps a MAP_READ buffer after the queued work, copies its bytes out, unmaps it.
+    pub(super) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| anyhow!("waiting for the GPU: {e}"))?;
+        self.check_device()?;
+        rx.recv()
+            .context("the GPU never answered the readback")?
+            .map_err(|e| anyhow!("reading back from the GPU: {e}"))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| anyhow!("mapping the readback: {e}"))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+}

@@ -1,0 +1,107 @@
+//! The CPU backend as a [`Backend`]: path tracing in passes of tiles, the light-subpath methods
+//! in iterations of a light pass and a camera pass (`crate::cpu`), on a rayon pool of its own.
+
+use super::Backend;
+use crate::film::provenance::{bidirectional_provenance, merging_provenance};
+use crate::film::{check_film_for, Film};
+
+/// The CPU backend as a [`Backend`], on a rayon pool of its own.
+pub struct CpuBackend<'a> {
+    pub scene: &'a crate::layout::FlatScene,
+    pub camera: crate::transport::camera::Camera,
+    pub seed: u32,
+    pub faults: crate::transport::faults::Faults,
+    /// Shadow rays per diffuse vertex (`--light-samples`, default 1; path tracing only).
+    pub light_samples: u32,
+    /// The light-transport method (`--method`, default path tracing).
+    pub method: crate::transport::method::Method,
+    /// Rays traced so far (closest-hit and shadow), for the benchmark.
+    pub rays: u64,
+    pub pool: rayon::ThreadPool,
+    /// The merge radius's schedule (SPPM, VCM; default: `MergeRadius::default_for`).
+    pub radius: Option<crate::transport::merging::MergeRadius>,
+    /// The light-subpath methods: the light pass's splats and vertices, made at the first pass.
+    buffers: Option<crate::cpu::LightPassBuffers>,
+}
+
+impl<'a> CpuBackend<'a> {
+    pub fn new(
+        scene: &'a crate::layout::FlatScene,
+        camera: crate::transport::camera::Camera,
+        seed: u32,
+        threads: usize,
+    ) -> anyhow::Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        Ok(Self {
+            scene,
+            camera,
+            seed,
+            faults: crate::transport::faults::Faults::NONE,
+            light_samples: 1,
+            method: crate::transport::method::Method::Path,
+            rays: 0,
+            pool,
+            radius: None,
+            buffers: None,
+        })
+    }
+}
+
+impl Backend for CpuBackend<'_> {
+    fn name(&self) -> &'static str {
+        "cpu"
+    }
+    fn device(&self) -> String {
+        format!("{} threads", self.pool.current_num_threads())
+    }
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        let mut out = match &self.buffers {
+            Some(b) if self.method.connects() => bidirectional_provenance(
+                b.shadow_threshold,
+                crate::transport::subpath::specular_camera_subpaths(self.method, b.radius.initial),
+                b.camera_subpaths.iter().filter(|&&n| n > 1).count(),
+            ),
+            _ => Vec::new(),
+        };
+        if let (Some(b), true) = (&self.buffers, self.method.merges()) {
+            out.extend(merging_provenance(&b.radius));
+        }
+        out
+    }
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+        let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
+        let light_samples = self.light_samples;
+        let method = self.method;
+        if method.splats() {
+            check_film_for(method, film)?;
+            let radius = self.radius.unwrap_or_else(|| {
+                crate::transport::merging::MergeRadius::default_for(scene, method)
+            });
+            let buffers = self.buffers.get_or_insert_with(|| {
+                crate::cpu::LightPassBuffers::new(scene, camera, method, radius)
+            });
+            self.rays += self.pool.install(|| {
+                crate::cpu::render_iterations(
+                    scene, camera, seed, first, count, method, faults, buffers, film,
+                )
+            });
+            return Ok(());
+        }
+        check_film_for(method, film)?;
+        self.rays += self.pool.install(|| {
+            crate::cpu::render_pass(
+                scene,
+                camera,
+                seed,
+                first,
+                count,
+                light_samples,
+                faults,
+                film,
+            )
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,26 @@
+//! The GPU renderer as a [`Backend`].
+
+use super::Backend;
+use crate::film::Film;
+use crate::gpu::GpuRenderer;
+
+/// The GPU renderer as a [`Backend`].
+pub struct GpuBackend {
+    pub renderer: GpuRenderer,
+    pub adapter: String,
+}
+
+impl Backend for GpuBackend {
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+    fn device(&self) -> String {
+        self.adapter.clone()
+    }
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+        self.renderer.render(first, count, film)
+    }
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        self.renderer.provenance()
+    }
+}

@@ -1,0 +1,146 @@
+//! Progressive rendering, common to both backends: passes of a few samples per pixel until the
+//! sample count or the time budget is reached, or the user stops it; the samples taken so far
+//! are kept in every case.
+
+use crate::film::Film;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+mod cpu_backend;
+mod gpu_backend;
+
+pub use cpu_backend::CpuBackend;
+pub use gpu_backend::GpuBackend;
+
+/// Something that can add samples `first..first + count` of every pixel to a film.
+pub trait Backend {
+    /// A short name for logs and metadata ("cpu", "gpu").
+    fn name(&self) -> &'static str;
+    /// The device it runs on, for logs and metadata.
+    fn device(&self) -> String;
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()>;
+    /// What the method chose or met that an image's provenance should say (`key`, value), for
+    /// the EXR metadata and the log.
+    fn provenance(&self) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+}
+
+/// When to stop: after `spp` samples per pixel, after `seconds`, whichever comes first (at least
+/// one of them is set).
+#[derive(Clone, Copy, Debug)]
+pub struct Budget {
+    pub spp: Option<u32>,
+    pub seconds: Option<f64>,
+}
+
+/// Why a render ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    SampleCount,
+    TimeBudget,
+    Interrupted,
+    /// The backend failed (e.g. the GPU device was lost); the film holds every pass before.
+    Failed(String),
+}
+
+/// What a progressive render did.
+#[derive(Clone, Debug)]
+pub struct RenderReport {
+    pub spp: u32,
+    pub seconds: f64,
+    pub reason: StopReason,
+}
+
+/// A pass aims at this duration, so that Ctrl-C and a time budget take effect promptly.
+const TARGET_PASS_SECONDS: f64 = 0.25;
+
+/// Runs passes until the budget is spent, `stop` is set or the backend fails; the samples of
+/// every completed pass stay in `film` in all cases. `on_pass(film, spp_done, elapsed)` is
+/// called after each pass (progress, checkpoints).
+pub fn render_progressive(
+    backend: &mut dyn Backend,
+    film: &mut Film,
+    budget: Budget,
+    stop: &AtomicBool,
+    mut on_pass: impl FnMut(&Film, u32, f64),
+) -> RenderReport {
+    assert!(budget.spp.is_some() || budget.seconds.is_some());
+    let start = Instant::now();
+    let mut done = film.spp() as u32;
+    let target = budget.spp.map(|s| done + s);
+    let mut per_spp = None::<f64>;
+    let reason = loop {
+        if stop.load(Ordering::SeqCst) {
+            break StopReason::Interrupted;
+        }
+        let elapsed = start.elapsed().as_secs_f64();
+        if target.is_some_and(|t| done >= t) {
+            break StopReason::SampleCount;
+        }
+        if budget.seconds.is_some_and(|s| elapsed >= s) {
+            break StopReason::TimeBudget;
+        }
+        // Size the pass from the measured cost of a sample per pixel: one sample first, then
+        // as many as fit in the target duration and in what remains of the budget.
+        let mut count = match per_spp {
+            None => 1,
+            Some(c) => {
+                let mut secs = TARGET_PASS_SECONDS;
+                if let Some(s) = budget.seconds {
+                    secs = secs.min(s - elapsed);
+                }
+                ((secs / c).floor() as u32).max(1)
+            }
+        };
+        if let Some(t) = target {
+            count = count.min(t - done);
+        }
+        let t0 = Instant::now();
+        if let Err(e) = backend.pass(done, count, film) {
+            break StopReason::Failed(format!("{e:#}"));
+        }
+        let dt = t0.elapsed().as_secs_f64();
+        // The first pass includes warm-up (thread pool start, shader compilation): measure
+        // the cost again on every pass and keep the latest.
+        per_spp = Some(dt / count as f64);
+        done += count;
+        on_pass(film, done, start.elapsed().as_secs_f64());
+    };
+    RenderReport {
+        spp: film.spp() as u32,
+        seconds: start.elapsed().as_secs_f64(),
+        reason,
+    }
+}
+
+/// Light vertices per light subpath assumed by [`host_bytes_per_pixel`]: well above the mean
+/// subpath length of the reference scenes (Russian roulette ends most subpaths within 3-5
+/// bounces), since the buffer grows to the longest iteration.
+const LIGHT_VERTICES_PER_PIXEL: u64 = 8;
+
+/// An estimate of the host memory a render holds per pixel, for the check before a render
+/// starts: the film's f64 sums, the EXR, variance and PNG images, and for the methods that trace
+/// light subpaths the splat film, n_c per pixel, the light vertices (one subpath per pixel) and
+/// the hash grid over them.
+pub fn host_bytes_per_pixel(method: crate::transport::method::Method) -> u64 {
+    use std::mem::size_of;
+    let film = size_of::<crate::film::PixelStats>() as u64;
+    let outputs = 2 * size_of::<[f32; 3]>() as u64 + 3;
+    let mut bytes = film + outputs;
+    if method.splats() {
+        let vertices = LIGHT_VERTICES_PER_PIXEL
+            * (size_of::<crate::transport::subpath::LightVertex>() + size_of::<[f32; 4]>() + 4)
+                as u64;
+        bytes += size_of::<crate::transport::splat::SplatCell>() as u64 + 4 + 4 + vertices;
+    }
+    bytes
+}
+
+/// Memory the system can give without swapping (Linux's MemAvailable), if known.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}

@@ -1,0 +1,113 @@
+//! The light-transport methods a render can use.
+
+use clap::ValueEnum;
+
+/// Which estimator renders the image (`--method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// Path tracing with next-event estimation and MIS (`src/cpu/path.rs`): one independent
+    /// camera path per sample.
+    Path,
+    /// Light tracing (`src/cpu/light_path.rs`): light subpaths connected to the camera. Sees
+    /// nothing through mirrors or glass: surfaces seen only that way stay black.
+    Light,
+    /// Bidirectional path tracing (`src/cpu/bdpt.rs`): every connection of a camera subpath and
+    /// a light subpath, weighed by MIS, and next-event estimation through planar mirrors (the
+    /// light's mirror image).
+    Bdpt,
+    /// Stochastic progressive photon mapping (`src/cpu/bdpt.rs` in its photon-mapping mode):
+    /// each camera subpath follows mirrors and glass to its first diffuse vertex and gathers
+    /// the photons (light vertices) of the iteration within a radius that shrinks over
+    /// iterations. Consistent, not unbiased: the bias vanishes as the radius does.
+    Sppm,
+    /// Vertex connection and merging at the first diffuse vertex (`src/cpu/bdpt.rs` with
+    /// merging): each camera subpath follows mirrors and glass to its first diffuse vertex and
+    /// ends there after next-event estimation, a connection to each vertex of its light
+    /// subpath and a merge with the iteration's photons, all weighed by MIS with light tracing
+    /// over exactly those strategies (`crate::transport::subpath`). Consistent, not unbiased. With
+    /// `--radius 0` it is bdpt.
+    Vcm,
+    /// Vertex connection and merging as published (Georgiev et al. 2012; `src/cpu/bdpt.rs`
+    /// with merging): BDPT's strategies (next-event estimation through planar mirrors only with
+    /// `--radius 0`, where it is bdpt) and photon merging at every diffuse camera vertex, all
+    /// weighed by MIS. Consistent, not unbiased.
+    VcmFull,
+}
+
+impl Method {
+    /// `hexray render`'s method when none is given: the one with the lowest relMSE at equal
+    /// time on the three reference scenes on each backend (docs/methods.md, "The default
+    /// method"), the GPU backend's judged on a hardware GPU: on an NVIDIA H200 at 256x256
+    /// (6 s) vcm had 0.75 of path's relMSE by the geometric mean, vcm-full 0.91 and sppm 2.47
+    /// (docs/gpu.md); on lavapipe (30 s) vcm and sppm are level (0.126 and 0.123, one render
+    /// each). Consistent, not unbiased: the summary line says so, and `hexray reference` keeps
+    /// path tracing.
+    pub const DEFAULT: Method = Method::Vcm;
+
+    /// Samples (iterations) when neither `--spp` nor `--time` is given, so that the default
+    /// render (tncg15_room, 512x512) takes about as long as path tracing's 64 samples: 64 of
+    /// path tracing; 8 of the methods that trace a light subpath and a camera subpath per pixel
+    /// and iteration, which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost
+    /// more as the image grows, since every pixel adds a photon). vcm took 20 while its radius
+    /// was 0.01 of the scene's; within the clearance at 0.03 its merges gather nine times the
+    /// photons (on 2 cores of an Intel Xeon VM, 2026-11-27 evening: 64 spp of path in 6.28 s,
+    /// 20 iterations of vcm in 17.1 s, 7 in 6.3 s).
+    pub fn default_samples(self) -> u32 {
+        match self {
+            Method::Path => 64,
+            _ => 8,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Path => "path",
+            Method::Light => "light",
+            Method::Bdpt => "bdpt",
+            Method::Sppm => "sppm",
+            Method::Vcm => "vcm",
+            Method::VcmFull => "vcm-full",
+        }
+    }
+
+    /// The method called `name` (as in the EXR metadata).
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::value_variants()
+            .iter()
+            .copied()
+            .find(|m| m.name() == name)
+    }
+
+    /// Whether the method traces light subpaths that every pixel of an iteration may use
+    /// (splatted or merged), so that an iteration's pixels share samples and its statistics
+    /// are batch means (`film.rs`).
+    pub fn splats(self) -> bool {
+        !matches!(self, Method::Path)
+    }
+
+    /// Whether the method merges photons: consistent rather than unbiased, with a bias that
+    /// the film's standard error does not cover and that vanishes as the radius shrinks.
+    pub fn merges(self) -> bool {
+        matches!(self, Method::Sppm | Method::Vcm | Method::VcmFull)
+    }
+
+    /// Whether the method merges within each camera vertex's clearance
+    /// (`merging::local_radius`): `vcm`, whose merges all happen at the first diffuse vertex of
+    /// a camera subpath, so that a radius that depends on that vertex enters every MIS weight
+    /// of a path alike (`subpath`, "A radius of the vertex").
+    pub fn merges_within_clearance(self) -> bool {
+        matches!(self, Method::Vcm)
+    }
+
+    /// Whether the method connects camera vertices to light vertices and emitters (BDPT's
+    /// strategies).
+    pub fn connects(self) -> bool {
+        matches!(self, Method::Bdpt | Method::Vcm | Method::VcmFull)
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
