@@ -1,4 +1,4 @@
-//! Nanoseconds a ray, one by one against eight to a packet (`src/packet.rs`), on the rays a
+//! Nanoseconds a ray, one by one against eight to a packet (`src/accel/packet.rs`), on the rays a
 //! path tracer's second bounce traces: from each pixel's first hit, a cosine-distributed
 //! closest-hit ray and a shadow ray to a point on an emitter (docs/performance.md, "Ray packets
 //! over a wavefront of paths"). One thread, the best of five timings of each.

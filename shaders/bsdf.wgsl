@@ -1,4 +1,4 @@
-// The three scattering models: `src/bsdf.rs`, line for line.
+// The three scattering models: `src/transport/bsdf.rs`, line for line.
 
 // Unpolarised Fresnel reflectance of a smooth dielectric (exact, not Schlick); 1 under total
 // internal reflection (pbrt-v4 eq. 9.6).
@@ -52,12 +52,12 @@ fn refract_through(wo: vec3<f32>, n_in: vec3<f32>, eta_in: f32) -> Refraction {
     return Refraction(true, normalize(wt), eta);
 }
 
-// Which quantity a path carries (`Transport` in src/bsdf.rs): camera subpaths radiance, light
+// Which quantity a path carries (`Transport` in src/transport/bsdf.rs): camera subpaths radiance, light
 // subpaths importance (flux), which refraction does not scale by 1 / eta^2.
 const TRANSPORT_RADIANCE: u32 = 0u;
 const TRANSPORT_IMPORTANCE: u32 = 1u;
 
-// The two-sided Lambertian BSDF for a pair of directions (`DiffuseEval` in src/bsdf.rs).
+// The two-sided Lambertian BSDF for a pair of directions (`DiffuseEval` in src/transport/bsdf.rs).
 struct DiffuseEval {
     // albedo / pi where wo and wi lie on one side, else 0.
     f: vec3<f32>,

@@ -1,4 +1,4 @@
-// The BVH traversal: `src/bvh.rs`, one traversal with a closest-hit and an any-hit mode: the four
+// The BVH traversal: `src/accel/bvh.rs`, one traversal with a closest-hit and an any-hit mode: the four
 // children's boxes tested at once, the nearest interior child first, an explicit stack in a
 // private array.
 
@@ -6,7 +6,7 @@
 // level.
 const STACK_SIZE: u32 = 64u;
 
-// "No interior child to visit next" (`None` in src/bvh.rs).
+// "No interior child to visit next" (`None` in src/accel/bvh.rs).
 const NO_NODE: u32 = 0xffffffffu;
 
 // Entry k of the primitive references (packed four to a vec4<u32>).

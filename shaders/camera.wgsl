@@ -1,4 +1,4 @@
-// The pinhole camera: `src/camera.rs`, line for line.
+// The pinhole camera: `src/transport/camera.rs`, line for line.
 
 // The ray through image position (x + jx, y + jy), pixel (0, 0) at the top left (`Camera::ray`).
 fn camera_ray(camera: Camera, x: u32, y: u32, jx: f32, jy: f32) -> Ray {

@@ -1,5 +1,5 @@
 // The film's side of the kernels: each pixel's samples of a pass added to its sums (folded into
-// f64 by the host after the pass, `src/film.rs`).
+// f64 by the host after the pass, `src/film/mod.rs`).
 
 fn max_element(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
@@ -40,7 +40,7 @@ var<workgroup> image_partial: array<vec3<f32>, 64>;
 // Light tracing and BDPT, after an iteration's light and camera passes: one invocation per pixel
 // of the tile. The pixel's value for the iteration, its camera subpath's radiance (BDPT; none for
 // light tracing) plus the splats it received, is one sample of the pixel, and goes into the
-// iteration's image sum (batch means, src/film.rs). If a wave of the iteration overflowed the
+// iteration's image sum (batch means, src/film/mod.rs). If a wave of the iteration overflowed the
 // light-vertex pool, the iteration is dropped here whole (the host traces it again); its splats
 // are cleared all the same.
 @compute @workgroup_size(8, 8, 1)

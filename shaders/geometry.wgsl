@@ -1,5 +1,5 @@
 // Ray-primitive intersection with floating-point error bounds, and spawning rays that cannot
-// hit the surface they leave: `src/geometry.rs`, line for line (pbrt-v4 section 6.8).
+// hit the surface they leave: `src/math/geometry.rs`, line for line (pbrt-v4 section 6.8).
 
 struct Ray {
     o: vec3<f32>,
@@ -183,7 +183,7 @@ fn triangle_point_at(tri: Triangle, b: vec3<f32>) -> PointWithError {
 // The point of a triangle hit at (b1, b2), moved into the triangle where it lies closer to an
 // edge than its own error bound, for spawning rays from it: each barycentric raised to at least
 // m |e_i| / (2A), m twice the L1 norm of the error box, and the three renormalised
-// (`triangle_hit_point` in src/geometry.rs says why).
+// (`triangle_hit_point` in src/math/geometry.rs says why).
 fn triangle_hit_point(tri: Triangle, b1: f32, b2: f32) -> PointWithError {
     let pe = triangle_point(tri, b1, b2);
     let b = vec3<f32>(1.0 - b1 - b2, b1, b2);

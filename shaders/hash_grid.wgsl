@@ -1,4 +1,4 @@
-// The hash grid over an iteration's light vertices for photon merging: `src/hash_grid.rs` again,
+// The hash grid over an iteration's light vertices for photon merging: `src/accel/hash_grid.rs` again,
 // with the same names. Cells of side 2r hashed into a power of two of buckets (at least as many
 // as vertices); the vertices sorted by bucket with a counting sort in dispatches: grid_setup
 // (the bucket count from the vertex count), grid_count (an atomic count per bucket),

@@ -1,4 +1,4 @@
-// Area lights: `src/light.rs`, line for line.
+// Area lights: `src/transport/light.rs`, line for line.
 
 struct LightSample {
     p: vec3<f32>,
@@ -11,7 +11,7 @@ struct LightSample {
 
 // The emitter-table row whose CDF interval holds u (first row with cdf > u).
 fn choose_emitter(u: f32) -> u32 {
-    // The first of rows 0..rows - 1 with cdf > u, or rows - 1: `first_above` in src/light.rs,
+    // The first of rows 0..rows - 1 with cdf > u, or rows - 1: `first_above` in src/transport/light.rs,
     // each halving a select (the answer lies in base..=base + size, every row before base has
     // cdf <= u).
     let candidates = frame.num_emitters - 1u;

@@ -1,4 +1,4 @@
-// Planar mirrors, and next-event estimation through them: `src/planar_mirror.rs` again, with the
+// Planar mirrors, and next-event estimation through them: `src/transport/planar_mirror.rs` again, with the
 // same names. The light point of next-event estimation reflected in a planar mirror's plane is a
 // light of the same area density; the path x -> m -> y through the mirror point m is taken by
 // that strategy alone (weight 1), and by no other: a partition of the paths whose light end is a
@@ -14,7 +14,7 @@ const NO_PLANAR_MIRROR: u32 = 0xffffffffu;
 
 // Whether the method takes next-event estimation through planar mirrors: one that `connects`
 // (BDPT's strategies) and does not merge, in a scene with planar mirrors: BDPT, and vcm with the
-// radius 0 (`takes_mirror_light` in src/planar_mirror.rs says why not VCM that merges).
+// radius 0 (`takes_mirror_light` in src/transport/planar_mirror.rs says why not VCM that merges).
 fn takes_mirror_light(connects: bool) -> bool {
     return connects && !merges() && frame.planar_mirror_count > 0u;
 }

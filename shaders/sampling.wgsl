@@ -1,4 +1,4 @@
-// Random numbers and warps: `src/sampling.rs`, line for line.
+// Random numbers and warps: `src/math/sampling.rs`, line for line.
 // Every random number is pcg4d(pixel, sample, dimension block, seed) (Jarzynski and Olano 2020),
 // integer operations only, so the CPU and the GPU draw the same bits.
 
@@ -35,7 +35,7 @@ fn dim_light_extra(bounce: u32, j: u32) -> u32 {
     return 0x80000000u + bounce * 256u + j;
 }
 
-// Light subpaths' own blocks, from 2^30 up (`DIM_EMISSION` in src/sampling.rs): emitter choice
+// Light subpaths' own blocks, from 2^30 up (`DIM_EMISSION` in src/math/sampling.rs): emitter choice
 // and point; direction of emission; then one block per bounce (direction, lobe, roulette).
 const DIM_EMISSION: u32 = 0x40000000u;
 const DIM_EMISSION_DIR: u32 = 0x40000001u;
@@ -89,7 +89,7 @@ fn sample_cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
 
 // (sin 2πu, cos 2πu) for u in [0, 1): the nearest quarter turn exactly, the remainder in
 // [-π/4, π/4] through Cephes' sinf/cosf minimax polynomials, the quarter turn swapping and
-// negating them (`sin_cos_turns` in src/sampling.rs).
+// negating them (`sin_cos_turns` in src/math/sampling.rs).
 fn sin_cos_turns(u: f32) -> vec2<f32> {
     let q = floor(u * 4.0 + 0.5);
     let x = (u * 4.0 - q) * (0.5 * PI);

@@ -1,4 +1,4 @@
-// The shared flattened scene, as `src/flat.rs` and `src/camera.rs` lay it out.
+// The shared flattened scene, as `src/layout/mod.rs` and `src/transport/camera.rs` lay it out.
 // Every struct here has a Rust twin of the same name and fields; `tests/layout.rs` compares
 // sizes and offsets with naga's reflection of this file.
 
@@ -171,6 +171,6 @@ const F32_MAX: f32 = 3.40282347e38;
 const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 
 // The scene arrays (bindings 0 to 5) are declared in bindings_storage.wgsl or
-// bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/render.rs).
+// bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/renderer/mod.rs).
 @group(0) @binding(6) var<uniform> frame: Frame;
 @group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;

@@ -1,4 +1,4 @@
-// Order-independent sums of splats: `src/splat.rs`, line for line. Each splat is rounded once to
+// Order-independent sums of splats: `src/transport/splat.rs`, line for line. Each splat is rounded once to
 // 64-bit fixed point (24 bits after the point) and added as an integer, in two atomic<u32> words
 // with a carry, so a sum does not depend on the order the splats arrive in, and equals the CPU's
 // for the same splats bit for bit.
@@ -18,7 +18,7 @@ const CELL_WORDS: u32 = 8u;
 const CELL_OVERFLOW: u32 = 6u;
 // The image cell's last word: the most light vertices any wave of the iteration asked for.
 const CELL_VERTICES: u32 = 7u;
-// Iterations per pass (`MAX_PASS_SPP` in src/gpu/render.rs).
+// Iterations per pass (`MAX_PASS_SPP` in src/gpu/renderer/mod.rs).
 const MAX_PASS_SPP: u32 = 64u;
 
 // Pixels the band's splat cells cover.

@@ -31,6 +31,7 @@ mod light_tracing;
 mod merge;
 mod meshes;
 mod mis_weights;
+mod module_graph;
 mod nothing_lost;
 mod photon_merging;
 mod precision;

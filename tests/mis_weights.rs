@@ -14,7 +14,7 @@
 //! any light subpath the renderer has ever stored. Each strategy's weight is computed by
 //! replaying its two subpaths over the path's vertices with the renderer's own functions
 //! (`SubpathMis::camera`, `light`, `at_hit`, `after_diffuse`, `after_specular` and the
-//! `weight_*` of `src/subpath.rs`), with the densities the renderer computes (cosine sampling,
+//! `weight_*` of `src/transport/subpath.rs`), with the densities the renderer computes (cosine sampling,
 //! the importance, the emitter table): the strategies that can make the path are s = 0 if xk is
 //! an emitter seen from its front, s = 1 (next-event estimation) and 2 ≤ s ≤ k − 1 (connections)
 //! where both ends of the connecting edge are diffuse, and s = k (t = 1, splat) where x1 is.

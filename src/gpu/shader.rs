@@ -21,7 +21,7 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 15] = [
+pub const BODY: [(&str, &str); 16] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
@@ -29,6 +29,7 @@ pub const BODY: [(&str, &str); 15] = [
         "clearance.wgsl",
         include_str!("../../shaders/clearance.wgsl"),
     ),
+    ("merging.wgsl", include_str!("../../shaders/merging.wgsl")),
     ("bsdf.wgsl", include_str!("../../shaders/bsdf.wgsl")),
     ("light.wgsl", include_str!("../../shaders/light.wgsl")),
     (
