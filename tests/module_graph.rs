@@ -76,7 +76,9 @@ fn code_only(source: &str) -> String {
             let hashes = rest[1..].chars().take_while(|&c| c == '#').count();
             let close = format!("\"{}", "#".repeat(hashes));
             let body = 2 + hashes;
-            let end = rest[body..].find(&close).map_or(rest.len(), |e| body + e + close.len());
+            let end = rest[body..]
+                .find(&close)
+                .map_or(rest.len(), |e| body + e + close.len());
             out.extend(rest[..end].chars().filter(|&c| c == '\n'));
             i += end;
         } else if b[i] == b'"' {
@@ -392,7 +394,11 @@ fn the_graph_sees_the_imports_that_exist() {
     // The checks above pass on an empty graph too: the reader must find known imports.
     let graph = library_graph();
     let has = |from: &str, to: &str| graph.get(from).is_some_and(|t| t.contains(to));
-    assert!(has("cpu::path", "accel::bvh"), "{:?}", graph.get("cpu::path"));
+    assert!(
+        has("cpu::path", "accel::bvh"),
+        "{:?}",
+        graph.get("cpu::path")
+    );
     assert!(has("flatten", "transport::planar_mirror"));
     assert!(has("gpu::renderer", "gpu::bidirectional"));
     assert!(has("gpu::bidirectional", "gpu::frame"));
@@ -408,19 +414,29 @@ fn a_planted_circle_is_found() {
         ("d", "// use crate::a;\nconst S: &str = \"crate::a\";\n"),
     ]);
     assert_eq!(circles(&graph), vec![vec!["a", "b", "c"]]);
-    assert!(graph["d"].is_empty(), "comments and strings are not imports");
+    assert!(
+        graph["d"].is_empty(),
+        "comments and strings are not imports"
+    );
 }
 
 #[test]
 fn a_planted_upward_import_breaks_the_layers() {
     let graph = graph_of(&[
         ("scene", "fn f() { crate::cpu::render() }\n"),
-        ("cpu", "use crate::gpu::Renderer;\nuse super::scene::Scene;\n"),
+        (
+            "cpu",
+            "use crate::gpu::Renderer;\nuse super::scene::Scene;\n",
+        ),
         ("gpu", "#[cfg(test)]\nmod tests { use crate::cpu::x; }\n"),
         ("newcomer", ""),
     ]);
     assert_eq!(
         layering_faults(&graph, LAYERS),
-        ["cpu -> gpu", "newcomer is in no layer of LAYERS", "scene -> cpu"]
+        [
+            "cpu -> gpu",
+            "newcomer is in no layer of LAYERS",
+            "scene -> cpu"
+        ]
     );
 }

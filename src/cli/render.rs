@@ -209,40 +209,166 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
     Ok((film, id))
 }
 
+/// How a step of `render` ends the command before its end: with an exit status (its message
+/// printed), or with an error for `run` to report.
+enum Stop {
+    Exit(ExitCode),
+    Error(anyhow::Error),
+}
+
+impl From<anyhow::Error> for Stop {
+    fn from(e: anyhow::Error) -> Self {
+        Stop::Error(e)
+    }
+}
+
+type Step<T> = std::result::Result<T, Stop>;
+
+/// A refusal of the input before any work: `error: …` on stderr, exit status 2.
+fn refuse(message: impl std::fmt::Display) -> Stop {
+    eprintln!("error: {message}");
+    Stop::Exit(ExitCode::from(EXIT_BAD_INPUT))
+}
+
+/// `hexray render`: every check of the input before any work (a refusal exits 2 and writes
+/// nothing), then the progressive render, its outputs and its summary.
 pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
     // First, so that a stop during the set-up (a GPU kernel's compilation takes seconds) ends
     // the render before its first sample, writing nothing.
     let stop = StopRequest::install().context("installing the signal handlers")?;
-    // --resume: the film so far, and the settings it was made with.
-    let mut args = args.clone();
-    let resumed = match args.resume.clone() {
-        None => None,
-        Some(exr) => match resume_from(&exr, &mut args) {
-            Ok(r) => Some(r),
-            Err(e) => {
-                eprintln!("error: --resume {}: {e:#}", exr.display());
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-        },
-    };
+    match render_steps(args, &stop) {
+        Ok(code) | Err(Stop::Exit(code)) => Ok(code),
+        Err(Stop::Error(e)) => Err(e),
+    }
+}
+
+fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
+    let (args, resumed) = resume_settings(args)?;
     let args = &args;
     let method = args.method.unwrap_or(Method::DEFAULT);
     let scene_path = args.scene_path();
-    // Everything that can be wrong with the input is found here, before any output exists.
-    let scene = match load_scene(&scene_path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    let scene = checked_scene(&scene_path, method)?;
+    let before = resumed.as_ref().map_or(0, |(f, _)| f.spp());
+    if let Some((_, id)) = &resumed {
+        check_resume(args, id, &scene, &scene_path, before)?;
+    }
+    let out = output_path(args, &scene_path)?;
+    check_light_samples(args, method)?;
+    let budget = budget_of(args, method, before);
+    check_memory(args, method)?;
+
+    let flat = FlatScene::build(&scene);
+    let camera = Camera::new(&scene.desc.camera, args.width, args.height);
+    let radius = merge_radius_of(method, args.radius, args.alpha, &flat).map_err(refuse)?;
+    // The last check before any work: the outputs can be written (not found after the render).
+    output::check_writable(&out, args.variance)
+        .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
+    let gpu = choose_gpu(args)?;
+    // Without --radius, a hardware GPU merges within its own default share of the scene
+    // (`merging::HARDWARE_GPU_RADIUS_FACTOR`): its renders run many more iterations.
+    let radius = match &gpu {
+        Some(g) if args.radius.is_none() && method.merges() => {
+            gpu::context::default_merge_radius(&g.info, &flat, radius)
         }
+        _ => radius,
     };
-    if method.splats() {
-        if let Err(issue) =
-            hexray::scene::validate::check_splat_range(&scene.desc, &method.to_string())
-        {
-            eprintln!("error: {}", scene.error_at(issue));
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
+    let mut backend: Box<dyn Backend + '_> = match &gpu {
+        None => {
+            let threads = args.threads.map_or_else(
+                || std::thread::available_parallelism().map_or(1, |n| n.get()),
+                |t| t as usize,
+            );
+            let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
+            cpu.light_samples = args.light_samples;
+            cpu.method = method;
+            cpu.radius = Some(radius);
+            Box::new(cpu)
         }
+        Some(g) => Box::new(gpu_backend(args, g, &flat, camera, method, radius)?),
+    };
+    if !args.quiet {
+        log_scene(&scene, &scene_path, &flat, args, backend.as_ref());
+    }
+
+    let record = Record {
+        args,
+        method,
+        radius,
+        scene: &scene,
+        scene_path: &scene_path,
+        earlier_seconds: resumed.as_ref().map_or(0.0, |(_, id)| id.render_seconds),
+        backend: backend.name(),
+        device: backend.device(),
+    };
+    let mut film = match resumed {
+        Some((film, _)) => film,
+        None => Film::new(args.width, args.height),
+    };
+    let report = render_with_checkpoints(backend.as_mut(), &mut film, budget, stop, &record, &out);
+
+    // A render that took no new samples writes nothing: earlier files stay as they were.
+    if film.spp() == before {
+        eprintln!("hexray: no samples were taken; nothing written");
+        return Ok(match report.reason {
+            StopReason::Interrupted => ExitCode::from(stop.exit_status()),
+            StopReason::Failed(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+            _ => ExitCode::SUCCESS,
+        });
+    }
+    let (mut meta, id) = record.of(&film, report.seconds);
+    let provenance = backend.provenance();
+    for (key, value) in &provenance {
+        meta.set(key, value);
+    }
+    write_outputs(&out, &film, &meta, &id, args)?;
+
+    let dropped_share = warn_dropped(&film);
+    if !args.quiet {
+        summarise(
+            args,
+            method,
+            radius,
+            &film,
+            before,
+            &report,
+            &provenance,
+            &out,
+        );
+    }
+    Ok(match report.reason {
+        StopReason::Interrupted => ExitCode::from(stop.exit_status()),
+        StopReason::Failed(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+        _ if dropped_share > DROPPED_SHARE_LIMIT => ExitCode::from(EXIT_DROPPED),
+        _ => ExitCode::SUCCESS,
+    })
+}
+
+/// --resume: the film so far, and the settings it was made with taken into the arguments.
+fn resume_settings(args: &RenderArgs) -> Step<(RenderArgs, Option<(Film, FilmIdentity)>)> {
+    let mut args = args.clone();
+    let resumed = match args.resume.clone() {
+        None => None,
+        Some(exr) => Some(
+            resume_from(&exr, &mut args)
+                .map_err(|e| refuse(format!("--resume {}: {e:#}", exr.display())))?,
+        ),
+    };
+    Ok((args, resumed))
+}
+
+/// The scene file, parsed and validated (everything that can be wrong with the input is found
+/// here, before any output exists), with a warning where it reaches past the tested precision.
+fn checked_scene(scene_path: &Path, method: Method) -> Step<Scene> {
+    let scene = load_scene(scene_path).map_err(refuse)?;
+    if method.splats() {
+        hexray::scene::validate::check_splat_range(&scene.desc, &method.to_string())
+            .map_err(|issue| refuse(scene.error_at(issue)))?;
     }
     let extent = hexray::scene::validate::extent(&scene.desc);
     if extent > hexray::scene::validate::TESTED_COORDINATE {
@@ -253,45 +379,48 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
             hexray::scene::validate::TESTED_COORDINATE
         );
     }
-    let before = resumed.as_ref().map_or(0, |(f, _)| f.spp());
-    if let Some((_, id)) = &resumed {
-        if id.scene_sha1 != scene.sha1 {
-            eprintln!(
-                "error: --resume: {} has changed since the render (SHA-1 {} then, {} now); \
-                 a resumed render must continue the same scene",
-                scene_path.display(),
-                id.scene_sha1,
-                scene.sha1
-            );
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
-        }
-        match (args.spp, args.time) {
-            (None, None) => {
-                eprintln!(
-                    "error: --resume needs --spp (the total to reach; it has {before}) or --time \
-                     (seconds more)"
-                );
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-            (Some(n), _) if u64::from(n) < before => {
-                eprintln!(
-                    "error: --resume: the render already has {before} samples per pixel, more \
-                     than --spp {n} (the total, not the samples to add)"
-                );
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-            (Some(n), _) if u64::from(n) == before => {
-                eprintln!(
-                    "hexray: the render already has {before} samples per pixel; nothing to do"
-                );
-                return Ok(ExitCode::SUCCESS);
-            }
-            _ => {}
-        }
+    Ok(scene)
+}
+
+/// A resumed render continues the same scene, to a total sample count above what it has (or
+/// for --time more seconds).
+fn check_resume(
+    args: &RenderArgs,
+    id: &FilmIdentity,
+    scene: &Scene,
+    scene_path: &Path,
+    before: u64,
+) -> Step<()> {
+    if id.scene_sha1 != scene.sha1 {
+        return Err(refuse(format!(
+            "--resume: {} has changed since the render (SHA-1 {} then, {} now); \
+             a resumed render must continue the same scene",
+            scene_path.display(),
+            id.scene_sha1,
+            scene.sha1
+        )));
     }
-    // The default output is named after the scene file (its stem: no folder in it), not the
-    // scene's `name`, so that a copied scene does not overwrite the original's render and no
-    // name can lead out of out/.
+    match (args.spp, args.time) {
+        (None, None) => Err(refuse(format!(
+            "--resume needs --spp (the total to reach; it has {before}) or --time \
+             (seconds more)"
+        ))),
+        (Some(n), _) if u64::from(n) < before => Err(refuse(format!(
+            "--resume: the render already has {before} samples per pixel, more \
+             than --spp {n} (the total, not the samples to add)"
+        ))),
+        (Some(n), _) if u64::from(n) == before => {
+            eprintln!("hexray: the render already has {before} samples per pixel; nothing to do");
+            Err(Stop::Exit(ExitCode::SUCCESS))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The EXR to write: --out, or out/STEM.exr after the scene file. The default is named after
+/// the file's stem (no folder in it), not the scene's `name`, so that a copied scene does not
+/// overwrite the original's render and no name can lead out of out/.
+fn output_path(args: &RenderArgs, scene_path: &Path) -> Step<PathBuf> {
     let out = args.out.clone().unwrap_or_else(|| {
         let stem = scene_path
             .file_stem()
@@ -302,81 +431,71 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
         .extension()
         .is_none_or(|e| !e.eq_ignore_ascii_case("exr"))
     {
-        eprintln!(
-            "error: --out {}: the output must be an .exr path (the PNG is written beside it)",
+        return Err(refuse(format!(
+            "--out {}: the output must be an .exr path (the PNG is written beside it)",
             out.display()
-        );
-        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        )));
     }
+    Ok(out)
+}
+
+/// --light-samples above 1 is path tracing's alone.
+fn check_light_samples(args: &RenderArgs, method: Method) -> Step<()> {
     if args.light_samples > 1 && method != Method::Path {
         let given = if args.method.is_none() {
             " (the default method; add --method path)"
         } else {
             ""
         };
-        eprintln!(
-            "error: --light-samples {} is for --method path; {method}{given} takes one light \
+        return Err(refuse(format!(
+            "--light-samples {} is for --method path; {method}{given} takes one light \
              sample per vertex",
             args.light_samples
-        );
-        return Ok(ExitCode::from(EXIT_BAD_INPUT));
+        )));
     }
-    // --spp is the total: a resumed render adds what is missing.
-    let budget = Budget {
+    Ok(())
+}
+
+/// When to stop. --spp is the total: a resumed render adds what is missing.
+fn budget_of(args: &RenderArgs, method: Method, before: u64) -> Budget {
+    Budget {
         spp: match (args.spp, args.time) {
             (Some(n), _) => Some(n - before as u32),
             (None, None) => Some(method.default_samples()),
             (None, Some(_)) => None,
         },
         seconds: args.time,
-    };
-    let threads = args.threads.map_or_else(
-        || std::thread::available_parallelism().map_or(1, |n| n.get()),
-        |t| t as usize,
-    );
-    // The host memory the render will hold, against what the machine has free, before any of
-    // it is allocated.
+    }
+}
+
+/// The host memory the render will hold, against what the machine has free, before any of it
+/// is allocated.
+fn check_memory(args: &RenderArgs, method: Method) -> Step<()> {
     let pixels = u64::from(args.width) * u64::from(args.height);
     let needed = pixels * hexray::render::host_bytes_per_pixel(method);
-    if let Some(free) = hexray::render::available_memory() {
-        if needed > free {
-            eprintln!(
-                "error: a {}x{} render with {method} needs about {:.1} GiB of memory and {:.1} GiB \
-                 is available; render a smaller image (--width, --height)",
-                args.width,
-                args.height,
-                needed as f64 / (1u64 << 30) as f64,
-                free as f64 / (1u64 << 30) as f64
-            );
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
-        }
+    match hexray::render::available_memory() {
+        Some(free) if needed > free => Err(refuse(format!(
+            "a {}x{} render with {method} needs about {:.1} GiB of memory and {:.1} GiB \
+             is available; render a smaller image (--width, --height)",
+            args.width,
+            args.height,
+            needed as f64 / (1u64 << 30) as f64,
+            free as f64 / (1u64 << 30) as f64
+        ))),
+        _ => Ok(()),
     }
+}
 
-    let flat = FlatScene::build(&scene);
-    let camera = Camera::new(&scene.desc.camera, args.width, args.height);
-    let radius = match merge_radius_of(method, args.radius, args.alpha, &flat) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(ExitCode::from(EXIT_BAD_INPUT));
-        }
-    };
-    // The last check before any work: the outputs can be written (not found after the render).
-    if let Err(e) = output::check_writable(&out, args.variance) {
-        eprintln!("error: --out {}: {e:#}", out.display());
-        return Ok(ExitCode::from(EXIT_BAD_INPUT));
-    }
-    let gpu = match args.backend {
+/// The GPU adapter of --backend, or None for the CPU backend. A software adapter (lavapipe)
+/// runs the kernel on the very cores the CPU backend uses, and slower, so `auto` takes it only
+/// when asked for by --adapter.
+fn choose_gpu(args: &RenderArgs) -> Step<Option<gpu::Gpu>> {
+    Ok(match args.backend {
         BackendChoice::Cpu => None,
-        BackendChoice::Gpu => match gpu::acquire(args.adapter.as_deref()) {
-            Ok(g) => Some(g),
-            Err(e) => {
-                eprintln!("error: --backend gpu: {e}");
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-        },
-        // A software adapter (lavapipe) runs the kernel on the very cores the CPU backend uses,
-        // about 5x slower (docs/gpu.md), so `auto` takes it only when asked for by --adapter.
+        BackendChoice::Gpu => Some(
+            gpu::acquire(args.adapter.as_deref())
+                .map_err(|e| refuse(format!("--backend gpu: {e}")))?,
+        ),
         BackendChoice::Auto => match gpu::acquire(args.adapter.as_deref()) {
             Ok(g) if g.info.device_type == wgpu::DeviceType::Cpu && args.adapter.is_none() => {
                 if !args.quiet {
@@ -405,116 +524,121 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
                 None
             }
         },
+    })
+}
+
+/// The GPU backend on adapter `g`: the scene and image checked against its limits, then the
+/// kernel built.
+fn gpu_backend(
+    args: &RenderArgs,
+    g: &gpu::Gpu,
+    flat: &FlatScene,
+    camera: Camera,
+    method: Method,
+    radius: hexray::transport::merging::MergeRadius,
+) -> Step<hexray::render::GpuBackend> {
+    let checks = if args.shader_checks {
+        gpu::Checks::Checked
+    } else {
+        gpu::Checks::Unchecked
     };
-    // Without --radius, a hardware GPU merges within its own default share of the scene
-    // (`merging::HARDWARE_GPU_RADIUS_FACTOR`): its renders run many more iterations.
-    let radius = match &gpu {
-        Some(g) if args.radius.is_none() && method.merges() => {
-            gpu::context::default_merge_radius(&g.info, &flat, radius)
-        }
-        _ => radius,
+    let residency = match args.scene_residency {
+        Some(ResidencyChoice::Storage) => gpu::Residency::Storage,
+        Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
+        None => gpu::Residency::preferred(&g.info, &g.device.limits(), flat),
     };
-    let mut backend: Box<dyn Backend + '_> = match &gpu {
-        None => {
-            let mut cpu = CpuBackend::new(&flat, camera, args.seed, threads)?;
-            cpu.light_samples = args.light_samples;
-            cpu.method = method;
-            cpu.radius = Some(radius);
-            Box::new(cpu)
-        }
-        Some(g) => {
-            let checks = if args.shader_checks {
-                gpu::Checks::Checked
-            } else {
-                gpu::Checks::Unchecked
-            };
-            let residency = match args.scene_residency {
-                Some(ResidencyChoice::Storage) => gpu::Residency::Storage,
-                Some(ResidencyChoice::Uniform) => gpu::Residency::Uniform,
-                None => gpu::Residency::preferred(&g.info, &g.device.limits(), &flat),
-            };
-            if let Err(e) = gpu::limits::check_scene_fits(&g.device.limits(), residency, &flat)
-                .and_then(|_| {
-                    gpu::limits::check_image_fits(
-                        &g.device.limits(),
-                        method,
-                        args.width,
-                        args.height,
-                    )
-                })
-            {
-                eprintln!("error: --backend gpu: {e}");
-                return Ok(ExitCode::from(EXIT_BAD_INPUT));
-            }
-            let compile = std::time::Instant::now();
-            let mut renderer = gpu::GpuRenderer::new(
-                &g.device,
-                &g.queue,
-                &flat,
-                camera,
-                args.seed,
-                hexray::transport::faults::Faults::NONE,
-                checks,
-                residency,
-                method,
-                hexray::cpu::shadow_probe::shadow_threshold_for(method, &flat, &camera),
-            )?;
-            renderer.set_light_samples(args.light_samples);
-            renderer.set_merge_radius(radius);
-            if !args.quiet {
-                eprintln!(
-                    "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
-                    compile.elapsed().as_secs_f64()
-                );
-            }
-            Box::new(hexray::render::GpuBackend {
-                renderer,
-                adapter: gpu::context::describe(&g.info),
-            })
-        }
-    };
+    let limits = g.device.limits();
+    gpu::limits::check_scene_fits(&limits, residency, flat)
+        .and_then(|_| gpu::limits::check_image_fits(&limits, method, args.width, args.height))
+        .map_err(|e| refuse(format!("--backend gpu: {e}")))?;
+    let compile = std::time::Instant::now();
+    let mut renderer = gpu::GpuRenderer::new(
+        &g.device,
+        &g.queue,
+        flat,
+        camera,
+        args.seed,
+        hexray::transport::faults::Faults::NONE,
+        checks,
+        residency,
+        method,
+        hexray::cpu::shadow_probe::shadow_threshold_for(method, flat, &camera),
+    )?;
+    renderer.set_light_samples(args.light_samples);
+    renderer.set_merge_radius(radius);
     if !args.quiet {
         eprintln!(
-            "hexray: {} ({} triangles, {} spheres, {} emitters, {} BVH nodes) at {}x{} on {} ({})",
-            scene_path.display(),
-            flat.triangles.len(),
-            flat.spheres.len(),
-            flat.emitters.len(),
-            flat.nodes.len(),
-            args.width,
-            args.height,
-            backend.name(),
-            backend.device()
+            "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
+            compile.elapsed().as_secs_f64()
         );
-        eprintln!(
-            "hexray: BVH of {} primitives built in {:.3} s",
-            flat.triangles.len() + flat.spheres.len(),
-            flat.bvh_seconds
-        );
-        for line in mesh_lines(&scene) {
-            eprintln!("hexray: {line}");
-        }
     }
+    Ok(hexray::render::GpuBackend {
+        renderer,
+        adapter: gpu::context::describe(&g.info),
+    })
+}
 
-    // What every output of this render records: the settings, the scene, and the time of all
-    // sessions (a resumed render adds to the time before).
-    let earlier_seconds = resumed.as_ref().map_or(0.0, |(_, id)| id.render_seconds);
-    let (backend_name, backend_device) = (backend.name(), backend.device());
-    let record = |film: &Film, seconds: f64| -> (Metadata, FilmIdentity) {
+/// What is rendered, where, and how long its BVH took.
+fn log_scene(
+    scene: &Scene,
+    scene_path: &Path,
+    flat: &FlatScene,
+    args: &RenderArgs,
+    backend: &dyn Backend,
+) {
+    eprintln!(
+        "hexray: {} ({} triangles, {} spheres, {} emitters, {} BVH nodes) at {}x{} on {} ({})",
+        scene_path.display(),
+        flat.triangles.len(),
+        flat.spheres.len(),
+        flat.emitters.len(),
+        flat.nodes.len(),
+        args.width,
+        args.height,
+        backend.name(),
+        backend.device()
+    );
+    eprintln!(
+        "hexray: BVH of {} primitives built in {:.3} s",
+        flat.triangles.len() + flat.spheres.len(),
+        flat.bvh_seconds
+    );
+    for line in mesh_lines(scene) {
+        eprintln!("hexray: {line}");
+    }
+}
+
+/// What every output of a render records: the settings, the scene, and the time of all its
+/// sessions (a resumed render adds to the time before).
+struct Record<'a> {
+    args: &'a RenderArgs,
+    method: Method,
+    radius: hexray::transport::merging::MergeRadius,
+    scene: &'a Scene,
+    scene_path: &'a Path,
+    earlier_seconds: f64,
+    backend: &'static str,
+    device: String,
+}
+
+impl Record<'_> {
+    /// The EXR metadata and the film's identity of `film` after `seconds` of this session.
+    fn of(&self, film: &Film, seconds: f64) -> (Metadata, FilmIdentity) {
+        let (args, method) = (self.args, self.method);
         let mut meta = Metadata::default();
         meta.set("spp", film.spp());
         meta.set("seed", args.seed);
         meta.set("light_samples", args.light_samples);
         meta.set("method", method);
-        meta.set("backend", backend_name);
-        meta.set("device", &backend_device);
+        meta.set("backend", self.backend);
+        meta.set("device", &self.device);
         meta.set(
             "render_seconds",
-            format!("{:.6}", earlier_seconds + seconds),
+            format!("{:.6}", self.earlier_seconds + seconds),
         );
-        meta.set("scene", scene_path.display());
-        meta.set("scene_name", &scene.desc.name);
-        meta.set("scene_sha1", &scene.sha1);
+        meta.set("scene", self.scene_path.display());
+        meta.set("scene_name", &self.scene.desc.name);
+        meta.set("scene_sha1", &self.scene.sha1);
         meta.set("hexray_version", env!("CARGO_PKG_VERSION"));
         meta.set("dropped_samples", film.dropped());
         meta.set("width", args.width);
@@ -528,67 +652,55 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
             seed: args.seed,
             method: method.to_string(),
             light_samples: args.light_samples,
-            merge_radius: merges.then_some(radius.initial),
-            merge_alpha: merges.then_some(radius.alpha),
-            scene: scene_path.display().to_string(),
-            scene_sha1: scene.sha1.clone(),
-            render_seconds: earlier_seconds + seconds,
+            merge_radius: merges.then_some(self.radius.initial),
+            merge_alpha: merges.then_some(self.radius.alpha),
+            scene: self.scene_path.display().to_string(),
+            scene_sha1: self.scene.sha1.clone(),
+            render_seconds: self.earlier_seconds + seconds,
         };
         (meta, id)
-    };
+    }
+}
 
-    let mut film = match resumed {
-        Some((film, _)) => film,
-        None => Film::new(args.width, args.height),
-    };
+/// The progressive render with its progress line and, with --checkpoint, the outputs so far
+/// written atomically every so often, so that a kill loses at most the interval.
+fn render_with_checkpoints(
+    backend: &mut dyn Backend,
+    film: &mut Film,
+    budget: Budget,
+    stop: &StopRequest,
+    record: &Record,
+    out: &Path,
+) -> hexray::render::RenderReport {
+    let args = record.args;
+    let before = film.spp();
+    let pixels = u64::from(args.width) * u64::from(args.height);
     let mut progress = Progress::new(args.quiet, budget, before, pixels);
     let mut last_checkpoint = 0.0;
-    let report = render_progressive(
-        backend.as_mut(),
-        &mut film,
-        budget,
-        stop.flag(),
-        |film, spp, secs| {
-            progress.update(spp, secs);
-            // --checkpoint: the outputs so far, atomically, so a kill loses at most the interval.
-            if args
-                .checkpoint
-                .is_some_and(|every| secs - last_checkpoint >= every)
-            {
-                last_checkpoint = secs;
-                let (meta, id) = record(film, secs);
-                if let Err(e) = write_outputs(&out, film, &meta, &id, args) {
-                    progress.println(&format!("hexray: warning: checkpoint not written: {e:#}"));
-                }
+    let report = render_progressive(backend, film, budget, stop.flag(), |film, spp, secs| {
+        progress.update(spp, secs);
+        if args
+            .checkpoint
+            .is_some_and(|every| secs - last_checkpoint >= every)
+        {
+            last_checkpoint = secs;
+            let (meta, id) = record.of(film, secs);
+            if let Err(e) = write_outputs(out, film, &meta, &id, args) {
+                progress.println(&format!("hexray: warning: checkpoint not written: {e:#}"));
             }
-        },
-    );
+        }
+    });
     progress.finish();
+    report
+}
 
-    // A render that took no new samples writes nothing: earlier files stay as they were.
-    if film.spp() == before {
-        eprintln!("hexray: no samples were taken; nothing written");
-        return Ok(match report.reason {
-            StopReason::Interrupted => ExitCode::from(stop.exit_status()),
-            StopReason::Failed(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
-            }
-            _ => ExitCode::SUCCESS,
-        });
-    }
-    let (mut meta, id) = record(&film, report.seconds);
-    let provenance = backend.provenance();
-    for (key, value) in &provenance {
-        meta.set(key, value);
-    }
-    write_outputs(&out, &film, &meta, &id, args)?;
-
-    let taken = film.spp() * pixels;
+/// Never silent: a dropped sample (not finite) is light missing from the image. Returns the
+/// share of samples dropped.
+fn warn_dropped(film: &Film) -> f64 {
+    let taken = film.spp() * u64::from(film.width) * u64::from(film.height);
     let dropped = film.dropped();
     let dropped_share = dropped as f64 / taken as f64;
     if dropped > 0 {
-        // Never silent: a dropped sample is light missing from the image.
         eprintln!(
             "hexray: warning: dropped {dropped} of {taken} samples ({:.3} %) whose value was not \
              finite{}",
@@ -603,73 +715,81 @@ pub(crate) fn render(args: &RenderArgs) -> Result<ExitCode> {
             }
         );
     }
-    if !args.quiet {
-        let (mean, se) = film.image_mean();
-        let paths = (film.spp() - before) as f64 * pixels as f64;
-        let why = match &report.reason {
-            StopReason::SampleCount => "sample count reached",
-            StopReason::TimeBudget => "time budget reached",
-            StopReason::Interrupted => "interrupted; samples so far kept",
-            StopReason::Failed(_) => "the backend failed; samples so far kept",
-        };
-        let resumed_from = if before > 0 {
-            format!(" (resumed from {before})")
-        } else {
-            String::new()
-        };
+    dropped_share
+}
+
+/// The summary on stderr: samples, time, camera paths/s and why the render stopped; the image
+/// mean with its standard error; for a consistent method, the bias it leaves; the method's
+/// provenance; the files written.
+#[allow(clippy::too_many_arguments)]
+fn summarise(
+    args: &RenderArgs,
+    method: Method,
+    radius: hexray::transport::merging::MergeRadius,
+    film: &Film,
+    before: u64,
+    report: &hexray::render::RenderReport,
+    provenance: &[(&'static str, String)],
+    out: &Path,
+) {
+    let pixels = u64::from(args.width) * u64::from(args.height);
+    let (mean, se) = film.image_mean();
+    let paths = (film.spp() - before) as f64 * pixels as f64;
+    let why = match &report.reason {
+        StopReason::SampleCount => "sample count reached",
+        StopReason::TimeBudget => "time budget reached",
+        StopReason::Interrupted => "interrupted; samples so far kept",
+        StopReason::Failed(_) => "the backend failed; samples so far kept",
+    };
+    let resumed_from = if before > 0 {
+        format!(" (resumed from {before})")
+    } else {
+        String::new()
+    };
+    eprintln!(
+        "rendered {} spp{resumed_from} with {} in {:.2} s ({:.3} M camera paths/s; {why}); \
+         dropped {} samples",
+        film.spp(),
+        method,
+        report.seconds,
+        paths / report.seconds / 1e6,
+        film.dropped(),
+    );
+    eprintln!(
+        "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
+        mean[0], mean[1], mean[2], se[0], se[1], se[2]
+    );
+    if method.merges() {
         eprintln!(
-            "rendered {} spp{resumed_from} with {} in {:.2} s ({:.3} M camera paths/s; {why}); \
-             dropped {dropped} samples",
-            film.spp(),
+            "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
+             (alpha {}) leaves a bias that the standard error does not cover",
             method,
-            report.seconds,
-            paths / report.seconds / 1e6,
+            radius.initial,
+            radius.at((film.spp() as u32).saturating_sub(1)),
+            radius.alpha
         );
-        eprintln!(
-            "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
-            mean[0], mean[1], mean[2], se[0], se[1], se[2]
-        );
-        if method.merges() {
+    }
+    for (key, value) in provenance {
+        eprintln!("{key}: {value}");
+    }
+    let (exr, png, var) = output::output_paths(out);
+    eprintln!(
+        "wrote {}, {} and {}",
+        exr.display(),
+        png.display(),
+        film_file::film_path(&exr).display()
+    );
+    if args.variance {
+        if film.spp() >= 2 {
+            eprintln!("wrote {}", var.display());
+        } else {
             eprintln!(
-                "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
-                 (alpha {}) leaves a bias that the standard error does not cover",
-                method,
-                radius.initial,
-                radius.at((film.spp() as u32).saturating_sub(1)),
-                radius.alpha
+                "no variance written: one sample per pixel has no sample variance \
+                 ({} left as it was)",
+                var.display()
             );
         }
-        for (key, value) in &provenance {
-            eprintln!("{key}: {value}");
-        }
-        let (exr, png, var) = output::output_paths(&out);
-        eprintln!(
-            "wrote {}, {} and {}",
-            exr.display(),
-            png.display(),
-            film_file::film_path(&exr).display()
-        );
-        if args.variance {
-            if film.spp() >= 2 {
-                eprintln!("wrote {}", var.display());
-            } else {
-                eprintln!(
-                    "no variance written: one sample per pixel has no sample variance \
-                     ({} left as it was)",
-                    var.display()
-                );
-            }
-        }
     }
-    Ok(match report.reason {
-        StopReason::Interrupted => ExitCode::from(stop.exit_status()),
-        StopReason::Failed(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-        _ if dropped_share > DROPPED_SHARE_LIMIT => ExitCode::from(EXIT_DROPPED),
-        _ => ExitCode::SUCCESS,
-    })
 }
 
 /// The progress of a render on stderr: a bar on a terminal; elsewhere (batch logs) a plain line
