@@ -15,7 +15,7 @@
 # 256x256), BENCH_SPP_512 (default 256, GPU only) and GOAL_SPP (default 50, at 800x800) size
 # the run. The tests find the scenes through the path they were built in; where the checkout
 # sits elsewhere, link it there first. On a lent machine the binaries travel stripped (`strip -o`)
-# with the Vulkan loader; docs/bench/2026-11-26_h100/ shows one run and its commands. On a fast
+# with the Vulkan loader; docs/records/2026-11-26_h100/ shows one run and its commands. On a fast
 # GPU, bench's short rows (path and light at 64 spp, the 800x800 goal, the stage runs) finish in
 # tens of milliseconds and are flagged as too short to time: expected; the curves and the
 # 30 s references give the long-run rates.
