@@ -210,14 +210,13 @@ for be in ("cpu", "gpu"):
         g = math.exp(sum(math.log(r) for r in g3) / len(g3)) if g3 and all(g3) else None
         best = lambda n: all(rs[n] is not None and (ratio(n, f"hexray {be} {o}") is None or rs[n] <= ratio(n, f"hexray {be} {o}")) for o in methods)
         cells = ["–" if rs[n] is None else (f"**{rs[n]:.2f}**" if best(n) else f"{rs[n]:.2f}") for n in cols]
-        label = "gpu" if be == "gpu" else "cpu"
-        print(f"| {label} | {m} | " + " | ".join(cells) + f" | {'–' if g is None else f'{g:.2f}'} |")
+        print(f"| {be} | {m} | " + " | ".join(cells) + f" | {'–' if g is None else f'{g:.2f}'} |")
 print()
 how = f"`docs/figures/methods.sh run`, {budget:.0f} s a curve"
 if machine:
     how += f", on {machine}"
 if gpu:
-    how += f"; the GPU backend on `{gpu}`"
+    how += f"; the GPU backend on lavapipe (`{gpu}`)" if "llvmpipe" in gpu else f"; the GPU backend on `{gpu}`"
 if commit:
     how += f"; commit {commit}"
 print(f"How this was measured: {how}. The curves, pictures and bench rows are in")
