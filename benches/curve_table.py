@@ -1,5 +1,5 @@
 """The curves that `hexray curve` and benches/mitsuba_curve.py write, read back for the tables of
-docs/methods.sh and docs/curves.sh (imported by both: `sys.path.insert(0, "benches")`)."""
+docs/figures/methods.sh and docs/figures/curves.sh (imported by both: `sys.path.insert(0, "benches")`)."""
 import csv
 import math
 import os

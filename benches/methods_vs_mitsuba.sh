@@ -9,7 +9,7 @@
 # in a first calibration render to take about SECONDS (default 30); then each hexray method in
 # METHODS (default "path bdpt vcm sppm", CPU backend, BACKEND to change) renders for exactly as
 # long as that Mitsuba render took (`--time`), 256x256. Every image is compared with the scene's
-# deep reference out/methods/refs/NAME_256.exr (`docs/methods.sh references`, or the committed GPU
+# deep reference out/methods/refs/NAME_256.exr (`docs/figures/methods.sh references`, or the committed GPU
 # references copied there: tests/data/references/README.md), whose own noise
 # (mean var_r / (r^2 + 0.01)) is subtracted from every relMSE. ALTERNATIONS (default 3) rounds.
 # Prints one table row per render and, per method, the median ratio to Mitsuba and its range.
@@ -35,7 +35,7 @@ relmse() { # IMAGE REF -> relMSE minus the reference's noise
 echo "scene,round,renderer,method,seconds,relmse_minus_ref_noise" > "$work/rows.csv"
 for name in "${scenes[@]}"; do
     scene=scenes/$name.json ref=out/methods/refs/${name}_256.exr
-    [ -f "$ref" ] || { echo "missing $ref: run docs/methods.sh references" >&2; exit 1; }
+    [ -f "$ref" ] || { echo "missing $ref: run docs/figures/methods.sh references" >&2; exit 1; }
     noise=$("$hexray" compare "$ref" "$ref" --json |
         python3 -c 'import json,sys; print(json.load(sys.stdin)["relmse_reference_noise"])')
     # Calibration: Mitsuba's samples per second on this scene, from 64 spp.

@@ -3,7 +3,7 @@
     python benches/mitsuba_curve.py SCENE.json --ref REF.exr|REF.npy [--res 256] [--seconds 30]
                                     [--integrator path|ptracer] [--spp N] [--seed S]
 
-CSV on stdout, `docs/methods.sh`'s overlay format (scene,variant,spp,seconds,rmse,relmse; the
+CSV on stdout, `docs/figures/methods.sh`'s overlay format (scene,variant,spp,seconds,rmse,relmse; the
 variant column is the integrator). Each point is a fresh render with its own seed, timed around
 the render call alone (after a warm-up render that compiles the kernels), with relMSE = mean
 (x - r)^2 / (r^2 + 0.01) over pixel-channels, as `hexray compare` computes it. Waves double the

@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # The 2020 course report's table: tncg15_room at 800x800 with (spp, shadow rays per vertex) =
 # (50, 2), (25, 2), (5, 1), (5, 10), on each backend: render time and relMSE against a long
-# reference. Usage: docs/shadow_rays.sh REFERENCE.exr [backends, default "cpu gpu"]
+# reference. Usage: docs/figures/shadow_rays.sh REFERENCE.exr [backends, default "cpu gpu"]
 # Make the reference first (a few minutes on 2 cores):
 #   hexray reference scenes/tncg15_room.json --backend cpu --width 800 --height 800 --spp 512 \
 #       --seed 9001 --out out/tncg15_800_ref.exr
-# Writes docs/shadow_rays/table.csv. relMSE_corrected subtracts the reference's own noise
+# Run it from the repository's root. Writes docs/figures/shadow_rays/table.csv. relMSE_corrected subtracts the reference's own noise
 # (E (x − r)² = var_x + var_r), which matters for the longer rows.
 set -euo pipefail
 ref=$1
 backends=${2:-cpu gpu}
 hexray=${HEXRAY:-target/release/hexray}
-out=docs/shadow_rays
+out=docs/figures/shadow_rays
 mkdir -p "$out" out/shadow_rays
 echo "backend,spp,shadow_rays,seconds,cpu_seconds,relmse,relmse_corrected" > "$out/table.csv.tmp"
 for b in $backends; do

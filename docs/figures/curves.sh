@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# docs/curves.md's charts of relMSE against time, hexray's path tracer on both backends with
+# docs/methods.md's charts of path tracing's relMSE against time (docs/figures/curves/), hexray's path tracer on both backends with
 # Mitsuba 3's measured in the same run, just before and just after hexray's (these machines drift by tens
 # of percent between hours, so an overlay read from a file of another day is not a measurement).
 #
-#   docs/curves.sh [SCENE_NAME ...]        (default: cornell_box tncg15_room)
+#   docs/figures/curves.sh [SCENE_NAME ...]        (default: cornell_box tncg15_room)
 #
 # Per scene: Mitsuba `path` (llvm_ad_rgb, all cores; benches/mitsuba_curve.py: doubling waves,
 # then one sized to end just past the budget), then `hexray curve` on the CPU backend and, where
@@ -14,11 +14,11 @@
 #
 # SECONDS_PER_CURVE (default 30) is the budget. References: cornell_box against Mitsuba's own
 # 8192-spp render (tests/data/references/cornell_box_256.npy), tncg15_room against
-# out/methods/refs/tncg15_room_256.exr (`docs/methods.sh references`). Needs MITSUBA_PYTHON
-# (default $HOME/mi/bin/python) with Mitsuba 3; see ../shared/mitsuba/. Output:
-# docs/curves/NAME/{curve.csv,mitsuba.csv,table.md,relmse_vs_*.{png,svg}}.
+# out/methods/refs/tncg15_room_256.exr (`docs/figures/methods.sh references`). Needs MITSUBA_PYTHON
+# (default $HOME/mi/bin/python), a Python with the `mitsuba` package (Mitsuba 3). Output:
+# docs/figures/curves/NAME/{curve.csv,mitsuba.csv,table.md,relmse_vs_*.{png,svg}}.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 hexray=${HEXRAY:-target/release/hexray}
 python=${MITSUBA_PYTHON:-$HOME/mi/bin/python}
 seconds=${SECONDS_PER_CURVE:-30}
@@ -26,7 +26,7 @@ scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(cornell_box tncg15_room)
 
 "$python" -c 'import mitsuba' 2> /dev/null ||
-    { echo "no Mitsuba 3 at $python (MITSUBA_PYTHON); see ../shared/mitsuba/README.md" >&2; exit 1; }
+    { echo "no Mitsuba 3 at $python (MITSUBA_PYTHON): install Mitsuba 3 (pip install mitsuba) in a Python and point MITSUBA_PYTHON at it" >&2; exit 1; }
 backends=cpu
 "$hexray" info | grep '^\[' > /dev/null && backends=cpu,gpu
 
@@ -45,8 +45,8 @@ mitsuba_curve() {
 }
 
 for name in "${scenes[@]}"; do
-    scene=scenes/$name.json ref=$(reference_of "$name") dir=docs/curves/$name
-    [ -f "$ref" ] || { echo "missing $ref: run docs/methods.sh references" >&2; exit 1; }
+    scene=scenes/$name.json ref=$(reference_of "$name") dir=docs/figures/curves/$name
+    [ -f "$ref" ] || { echo "missing $ref: run docs/figures/methods.sh references" >&2; exit 1; }
     mkdir -p "$dir"
     echo "== $name: Mitsuba path, $seconds s (before)" >&2
     mitsuba_curve "$scene" "$ref" before > "$dir/mitsuba.csv"
