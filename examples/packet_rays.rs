@@ -1,6 +1,6 @@
 //! Nanoseconds a ray, one by one against eight to a packet (`src/accel/packet.rs`), on the rays a
 //! path tracer's second bounce traces: from each pixel's first hit, a cosine-distributed
-//! closest-hit ray and a shadow ray to a point on an emitter (docs/performance.md, "Ray packets
+//! closest-hit ray and a shadow ray to a point on an emitter (docs/journal/2026-11-26_packets.md, "Ray packets
 //! over a wavefront of paths"). One thread, the best of five timings of each.
 //!
 //! ```sh

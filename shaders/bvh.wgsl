@@ -33,7 +33,7 @@ struct Candidate {
 // hit interior child is visited next and the others are pushed with their entry distances (bits
 // in .y): a missed child is never pushed and a pushed one that a closer hit has since passed is
 // dropped when popped. Only the nearest child is chosen by distance: sorting all four was measured
-// slower on the CPU for the little culling it adds (docs/performance.md).
+// slower on the CPU for the little culling it adds (docs/journal/2026-11-23_cpu_traversal.md).
 fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
     var best = Candidate(false, t_max, 0u, 0.0, 0.0);
     let inv_d = safe_inverse(ray.d);

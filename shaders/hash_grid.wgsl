@@ -98,7 +98,7 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 // The inclusive prefix sum over grid_starts[1 ..= buckets] in three dispatches, so that it
 // spreads over the whole GPU (one workgroup alone took 59 % of an sppm iteration on an H100 at
-// 512x512, docs/gpu.md): grid_scan_blocks scans blocks of SCAN_BLOCK counts in place, one
+// 512x512, docs/journal/2026-11-26_h100.md): grid_scan_blocks scans blocks of SCAN_BLOCK counts in place, one
 // workgroup each, and leaves each block's total in grid_cursor (free until the scatter);
 // grid_scan_sums scans those totals in one workgroup; grid_scan_add adds to each block the
 // totals of the blocks before it. Integer sums, so the starts are the CPU's exactly.

@@ -6,6 +6,7 @@ use crate::common::repo;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::{Command, Output};
+use crate::common::temp_dir;
 
 struct Case {
     name: &'static str,
@@ -228,17 +229,11 @@ fn hexray(args: &[&str]) -> Output {
         .expect("running hexray")
 }
 
-fn temp_dir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-bad-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Runs hexray on `scene_text` with outputs in an empty folder that holds one old PNG; checks the
 /// exit status, that the old PNG is untouched and that nothing else appeared. Returns stderr.
 fn run_refused(tag: &str, scene_text: &str) -> (String, std::path::PathBuf) {
-    let dir = temp_dir(tag);
+    let dir = temp_dir!(tag);
     let file = dir.join("scene.json");
     std::fs::write(&file, scene_text).unwrap();
     let out = dir.join("out");
@@ -362,7 +357,7 @@ fn a_json_syntax_error_points_at_the_place() {
 #[test]
 fn a_missing_scene_file_is_a_clear_error() {
     let (stderr, _) = {
-        let dir = temp_dir("missing");
+        let dir = temp_dir!("missing");
         let o = hexray(&[
             "render",
             dir.join("nope.json").to_str().unwrap(),
@@ -381,7 +376,7 @@ fn a_missing_scene_file_is_a_clear_error() {
 
 #[test]
 fn bad_arguments_exit_2_before_rendering() {
-    let dir = temp_dir("args");
+    let dir = temp_dir!("args");
     let exr = dir.join("x.exr");
     let scene = repo(ROOM);
     for args in [
@@ -422,7 +417,7 @@ fn a_scene_file_beyond_the_size_limit_is_refused_without_reading_it_all() {
 
 #[test]
 fn invalid_utf8_is_located() {
-    let dir = temp_dir("utf8");
+    let dir = temp_dir!("utf8");
     let scene = dir.join("s.json");
     std::fs::write(&scene, b"{\n  \"name\": \"caf\xe9\"\n}").unwrap();
     let o = hexray(&["render", scene.to_str().unwrap()]);
@@ -454,7 +449,7 @@ fn an_image_too_large_for_memory_is_refused_before_allocating() {
 
 #[test]
 fn radiance_beyond_the_splat_range_is_refused_for_the_splatting_methods_only() {
-    let dir = temp_dir("splat");
+    let dir = temp_dir!("splat");
     let mut v: Value = serde_json::from_str(&std::fs::read_to_string(repo(ROOM)).unwrap()).unwrap();
     v["materials"]["light"]["radiance"] = json!([1e12, 1e12, 1e12]);
     let scene = dir.join("bright.json");
@@ -536,7 +531,7 @@ fn trailing_content_duplicates_and_positional_arrays_are_refused_with_a_location
 
 #[test]
 fn a_scene_with_a_byte_order_mark_is_accepted() {
-    let dir = temp_dir("bom");
+    let dir = temp_dir!("bom");
     let scene = dir.join("bom.json");
     let text = std::fs::read_to_string(repo(ROOM)).unwrap();
     std::fs::write(&scene, format!("\u{feff}{text}")).unwrap();

@@ -1,7 +1,7 @@
 //! BDPT is unbiased against references it had no part in: Mitsuba 3's cornell_box (the test
 //! path tracing passes in `tests/independent_renderer.rs`, same statistic), and path tracing's
 //! long references of tncg15_room, glass_room, the caustic and the 10^2 tiny light (32x32,
-//! 65536 spp, `docs/stability.sh references`).
+//! 65536 spp, `docs/figures/stability.sh references`).
 //!
 //! Statistics: against Mitsuba, 4x4 blocks with fewer than 0.1 % of block-channels beyond 5 s.e.
 //! and the image-mean ratio within 4 s.e.; against the long references, the image mean within 4

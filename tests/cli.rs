@@ -6,6 +6,7 @@ use crate::common::repo;
 use hexray::film::output::read_exr;
 use std::path::PathBuf;
 use std::process::Command;
+use crate::common::temp_dir;
 
 fn hexray() -> Command {
     let mut c = Command::new(crate::common::hexray_bin());
@@ -13,16 +14,10 @@ fn hexray() -> Command {
     c
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 #[test]
 fn render_writes_exr_png_and_variance_with_metadata() {
-    let dir = temp_dir("render");
+    let dir = temp_dir!("render");
     let exr = dir.join("cb.exr");
     let o = hexray()
         .args([
@@ -75,7 +70,7 @@ fn render_writes_exr_png_and_variance_with_metadata() {
 
 #[test]
 fn render_is_the_default_subcommand() {
-    let dir = temp_dir("default");
+    let dir = temp_dir!("default");
     let exr = dir.join("room.exr");
     let o = hexray()
         .args([
@@ -100,7 +95,7 @@ fn render_is_the_default_subcommand() {
 
 #[test]
 fn a_time_budget_ends_the_render_and_keeps_its_samples() {
-    let dir = temp_dir("time");
+    let dir = temp_dir!("time");
     let exr = dir.join("t.exr");
     let o = hexray()
         .args([
@@ -148,7 +143,7 @@ impl Drop for KillOnDrop {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_ends_the_render_and_keeps_its_samples() {
-    let dir = temp_dir("ctrlc");
+    let dir = temp_dir!("ctrlc");
     let exr = dir.join("c.exr");
     let mut child = KillOnDrop(
         hexray()
@@ -202,7 +197,7 @@ fn ctrl_c_ends_the_render_and_keeps_its_samples() {
 /// clear error with the install line for lavapipe, exit 2, and no output.
 #[test]
 fn gpu_backend_without_an_adapter_is_a_clear_error() {
-    let dir = temp_dir("noadapter");
+    let dir = temp_dir!("noadapter");
     let exr = dir.join("n.exr");
     let o = hexray()
         .env("WGPU_BACKEND", "metal")
@@ -232,7 +227,7 @@ fn gpu_backend_without_an_adapter_is_a_clear_error() {
 /// The default backend, `auto`, falls back to the CPU and says so in one line.
 #[test]
 fn auto_backend_falls_back_to_the_cpu_and_says_why() {
-    let dir = temp_dir("auto");
+    let dir = temp_dir!("auto");
     let exr = dir.join("a.exr");
     let o = hexray()
         .env("WGPU_BACKEND", "metal")
@@ -257,7 +252,7 @@ fn gpu_backend_renders_and_records_its_adapter() {
     let Some(gpu) = crate::common::gpu() else {
         return;
     };
-    let dir = temp_dir("gpu");
+    let dir = temp_dir!("gpu");
     let exr = dir.join("g.exr");
     let o = hexray()
         .args([
@@ -293,7 +288,7 @@ fn auto_backend_prefers_the_cpu_backend_over_a_software_adapter() {
         eprintln!("skipping: the adapter is a hardware GPU");
         return;
     }
-    let dir = temp_dir("auto-software");
+    let dir = temp_dir!("auto-software");
     let exr = dir.join("a.exr");
     let o = hexray()
         .args(["--spp", "1", "--width", "8", "--height", "8", "--out"])
@@ -325,7 +320,7 @@ fn render_to(out: &std::path::Path) -> std::process::Output {
 #[cfg(unix)]
 #[test]
 fn an_unwritable_output_is_refused_before_rendering() {
-    let dir = temp_dir("unwritable");
+    let dir = temp_dir!("unwritable");
     let file = dir.join("plain");
     std::fs::write(&file, b"x").unwrap();
     let folder = dir.join("folder.exr");
@@ -341,7 +336,7 @@ fn an_unwritable_output_is_refused_before_rendering() {
 /// `.exr` is accepted in any letter case, and the EXR keeps the name given.
 #[test]
 fn an_output_named_in_capitals_is_written_as_named() {
-    let dir = temp_dir("capitals");
+    let dir = temp_dir!("capitals");
     let out = dir.join("ROOM.EXR");
     let o = render_to(&out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -352,7 +347,7 @@ fn an_output_named_in_capitals_is_written_as_named() {
 /// original's render, and a scene `name` of "../../x" cannot write outside out/.
 #[test]
 fn the_default_output_is_named_after_the_scene_file() {
-    let dir = temp_dir("stem");
+    let dir = temp_dir!("stem");
     let mut scene: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(repo("scenes/tncg15_room.json")).unwrap())
             .unwrap();
@@ -377,7 +372,7 @@ fn the_default_output_is_named_after_the_scene_file() {
 /// escaped in the file, read back as it was, never a panic after the render.
 #[test]
 fn a_scene_path_beyond_latin_1_is_recorded_in_the_exr() {
-    let dir = temp_dir("unicode").join("場景");
+    let dir = temp_dir!("unicode").join("場景");
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("部屋.json");
     std::fs::copy(repo("scenes/tncg15_room.json"), &scene).unwrap();
@@ -400,7 +395,7 @@ fn a_scene_path_beyond_latin_1_is_recorded_in_the_exr() {
 /// which copy was used. Without the built-in copy this exits 2 ("cannot read the scene file").
 #[test]
 fn the_default_scene_renders_from_any_folder() {
-    let dir = temp_dir("elsewhere");
+    let dir = temp_dir!("elsewhere");
     let o = Command::new(crate::common::hexray_bin())
         .current_dir(&dir)
         .args(["render", "--backend", "cpu", "--spp", "1"])

@@ -5,15 +5,10 @@ use crate::common::repo;
 use hexray::analysis::compare::{compare, read_image, RELMSE_EPSILON};
 use hexray::film::output::{write_exr, Metadata, RgbImage};
 use npyz::WriterBuilder;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use crate::common::temp_dir;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-compare-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// A deterministic test image with values spread over [0, 2).
 fn image(w: usize, h: usize) -> RgbImage {
@@ -93,7 +88,7 @@ fn a_constant_offset_gives_the_closed_form_errors() {
 
 #[test]
 fn an_npy_and_an_exr_of_the_same_data_compare_equal() {
-    let dir = temp_dir("npy");
+    let dir = temp_dir!("npy");
     let a = image(12, 7);
     let (npy, exr) = (dir.join("a.npy"), dir.join("a.exr"));
     write_npy(&npy, &a);
@@ -117,7 +112,7 @@ fn an_npy_and_an_exr_of_the_same_data_compare_equal() {
 
 #[test]
 fn images_of_different_sizes_are_a_clear_error() {
-    let dir = temp_dir("size");
+    let dir = temp_dir!("size");
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     write_exr(&a, &image(16, 8), &Metadata::default()).unwrap();
     write_exr(&b, &image(8, 16), &Metadata::default()).unwrap();
@@ -156,7 +151,7 @@ fn upsampled(img: &RgbImage, k: usize) -> RgbImage {
 /// sub-pixel raised by 4 moves its block's mean by exactly 1.
 #[test]
 fn a_render_at_twice_the_size_compares_as_its_block_means() {
-    let dir = temp_dir("blocks");
+    let dir = temp_dir!("blocks");
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     let reference = image(8, 6);
     let mut big = upsampled(&reference, 2);

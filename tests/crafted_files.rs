@@ -5,14 +5,12 @@
 use hexray::film::output::{read_exr, write_exr, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Output;
+use crate::common::temp_dir;
 
 fn hexray(args: &[&str]) -> Output {
     crate::common::hexray_command().args(args).output().unwrap()
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    crate::common::empty_temp_dir(&format!("crafted-{name}"))
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -74,7 +72,7 @@ fn refused(o: &Output, words: &str) {
 
 #[test]
 fn a_header_claiming_more_pixels_than_the_file_holds_is_refused_before_allocating() {
-    let dir = temp_dir("header");
+    let dir = temp_dir!("header");
     let a = part(&dir, "a.exr", 1);
     // Patch the data window (box2i: xmin, ymin, xmax, ymax) to 100000 x 100000.
     let mut bytes = std::fs::read(&a).unwrap();
@@ -93,7 +91,7 @@ fn a_header_claiming_more_pixels_than_the_file_holds_is_refused_before_allocatin
 
 #[test]
 fn merge_refuses_a_non_finite_pixel_by_file_and_position() {
-    let dir = temp_dir("nan");
+    let dir = temp_dir!("nan");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     rewrite(&b, |img, _| img.pixels[16 * 3 + 5][1] = f32::NAN);
     let o = hexray(&["merge", s(&a), s(&b), "--out", s(&dir.join("m.exr"))]);
@@ -103,7 +101,7 @@ fn merge_refuses_a_non_finite_pixel_by_file_and_position() {
 
 #[test]
 fn merge_refuses_a_negative_variance() {
-    let dir = temp_dir("negvar");
+    let dir = temp_dir!("negvar");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     rewrite(&dir.join("b_var.exr"), |img, _| img.pixels[7][0] = -1e-3);
     let o = hexray(&["merge", s(&a), s(&b), "--out", s(&dir.join("m.exr"))]);
@@ -112,7 +110,7 @@ fn merge_refuses_a_negative_variance() {
 
 #[test]
 fn merge_refuses_spp_beyond_what_a_render_takes() {
-    let dir = temp_dir("spp");
+    let dir = temp_dir!("spp");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     for f in [b.clone(), dir.join("b_var.exr")] {
         rewrite(&f, |_, meta| meta.set("spp", u64::MAX));
@@ -123,7 +121,7 @@ fn merge_refuses_spp_beyond_what_a_render_takes() {
 
 #[test]
 fn a_stale_variance_file_is_refused_by_merge_and_compare() {
-    let dir = temp_dir("stale");
+    let dir = temp_dir!("stale");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     // b rendered again without --variance: its _var.exr is the old render's.
     render("scenes/cornell_box.json", 2, 6, false, &b);
@@ -135,7 +133,7 @@ fn a_stale_variance_file_is_refused_by_merge_and_compare() {
 
 #[test]
 fn compare_thresholds_set_the_exit_status_and_other_scenes_are_flagged() {
-    let dir = temp_dir("thresholds");
+    let dir = temp_dir!("thresholds");
     let (a, b) = (part(&dir, "a.exr", 1), part(&dir, "b.exr", 2));
     assert!(hexray(&["compare", s(&a), s(&b), "--max-relmse", "10"])
         .status

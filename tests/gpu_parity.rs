@@ -116,7 +116,7 @@ fn same_streams(rel: &str, gpu_faults: Faults) -> Option<f64> {
 /// f32 rounding (`sqrt`, `sin`, `cos` round differently and now and then flip a Russian
 /// roulette decision or a grazing hit; measured relMSE 6.1e-8 on tncg15_room), far below the
 /// sampling error of one render (relMSE about 0.16 against the reference at 64 spp,
-/// docs/curves.md). A lane that regenerated its path with the wrong sample's streams (planted by
+/// docs/methods.md). A lane that regenerated its path with the wrong sample's streams (planted by
 /// hand in the shader on 2026-11-25: the sampler not renewed for the next sample) is rejected
 /// at relMSE 2.75.
 #[test]

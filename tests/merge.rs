@@ -8,6 +8,7 @@ use hexray::analysis::stats::{student_t_two_sided_p, welch_blocks, MeanImage};
 use hexray::film::output::{read_exr, Metadata, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use crate::common::temp_dir;
 
 const SCENE: &str = "scenes/cornell_box.json";
 const SIZE: &str = "48";
@@ -18,12 +19,6 @@ fn hexray() -> Command {
     c
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-merge-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn render(scene: &str, seed: u32, spp: u32, out: &Path) {
     render_with(scene, seed, spp, "path", out);
@@ -121,7 +116,7 @@ fn variance_log_ratio_test(a: &MeanImage, b: &MeanImage) -> (f64, f64, f64) {
 /// which one part's image is 30 % too bright.
 #[test]
 fn four_parts_of_64_spp_merged_equal_one_render_of_256() {
-    let dir = temp_dir("equal");
+    let dir = temp_dir!("equal");
     let (merged, single, parts) = four_parts_and_one_render(&dir);
     let (m, meta) = load(&merged);
     let (s, _) = load(&single);
@@ -176,7 +171,7 @@ fn four_parts_of_64_spp_merged_equal_one_render_of_256() {
 /// byte for byte the same (parts are summed in seed order).
 #[test]
 fn merging_in_any_order_gives_the_same_bytes() {
-    let dir = temp_dir("order");
+    let dir = temp_dir!("order");
     let parts: Vec<PathBuf> = (1..=3).map(|s| dir.join(format!("p{s}.exr"))).collect();
     for (s, p) in (1..=3).zip(&parts) {
         render(SCENE, s, 4, p);
@@ -196,7 +191,7 @@ fn merging_in_any_order_gives_the_same_bytes() {
 /// nothing written.
 #[test]
 fn a_repeated_seed_is_refused_and_nothing_is_written() {
-    let dir = temp_dir("repeat");
+    let dir = temp_dir!("repeat");
     let (p1, p2) = (dir.join("p1.exr"), dir.join("again.exr"));
     render(SCENE, 7, 4, &p1);
     render(SCENE, 7, 4, &p2);
@@ -218,7 +213,7 @@ fn a_repeated_seed_is_refused_and_nothing_is_written() {
 /// A part of another scene is refused, naming it, exit 2, nothing written.
 #[test]
 fn a_part_of_another_scene_is_refused_and_nothing_is_written() {
-    let dir = temp_dir("scene");
+    let dir = temp_dir!("scene");
     let (p1, p2) = (dir.join("cornell.exr"), dir.join("glass.exr"));
     render(SCENE, 1, 4, &p1);
     render("scenes/glass_room.json", 2, 4, &p2);
@@ -238,7 +233,7 @@ fn a_part_of_another_scene_is_refused_and_nothing_is_written() {
 
 #[test]
 fn a_part_of_another_method_is_refused_naming_both() {
-    let dir = temp_dir("method");
+    let dir = temp_dir!("method");
     let (p1, p2) = (dir.join("path.exr"), dir.join("bdpt.exr"));
     render(SCENE, 1, 4, &p1);
     render_with(SCENE, 2, 4, "bdpt", &p2);
@@ -257,7 +252,7 @@ fn a_part_of_another_method_is_refused_naming_both() {
 /// Parts of BDPT merge like path tracing's: per pixel, iterations are samples.
 #[test]
 fn bdpt_parts_merge_and_keep_their_method() {
-    let dir = temp_dir("bdpt");
+    let dir = temp_dir!("bdpt");
     let (p1, p2) = (dir.join("a.exr"), dir.join("b.exr"));
     render_with(SCENE, 1, 4, "bdpt", &p1);
     render_with(SCENE, 2, 4, "bdpt", &p2);
@@ -275,7 +270,7 @@ fn bdpt_parts_merge_and_keep_their_method() {
 /// counts or process scheduling) and the same sample count and seeds.
 #[test]
 fn the_local_runner_script_equals_the_cli_by_hand() {
-    let dir = temp_dir("runner");
+    let dir = temp_dir!("runner");
     let by_script = dir.join("script");
     let o = Command::new("bash")
         .current_dir(repo("."))
@@ -318,7 +313,7 @@ fn the_local_runner_script_equals_the_cli_by_hand() {
 /// (exit 2) and the part is left as it was.
 #[test]
 fn a_variance_file_as_a_part_or_an_output_over_a_part_is_refused() {
-    let dir = temp_dir("misuse");
+    let dir = temp_dir!("misuse");
     let (p1, p2) = (dir.join("p1.exr"), dir.join("p2.exr"));
     render(SCENE, 1, 4, &p1);
     render(SCENE, 2, 4, &p2);

@@ -14,15 +14,10 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use crate::common::temp_dir;
 
 const ROOM: &str = "scenes/tncg15_room.json";
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("hexray-meshes-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn room() -> Value {
     serde_json::from_str(&std::fs::read_to_string(repo(ROOM)).unwrap()).unwrap()
@@ -150,7 +145,7 @@ fn write_scene(dir: &Path, name: &str, scene: &Value) -> PathBuf {
 
 #[test]
 fn a_mesh_renders_bit_for_bit_alike_as_binary_ply_ascii_ply_obj_and_inline_triangles() {
-    let dir = temp_dir("formats");
+    let dir = temp_dir!("formats");
     let m = small_mesh();
     std::fs::create_dir_all(dir.join("models")).unwrap();
     let files: [(&str, Vec<u8>); 4] = [
@@ -236,7 +231,7 @@ fn mesh_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
 
 #[test]
 fn a_rotation_moves_the_mesh_bounds_where_the_closed_form_says() {
-    let dir = temp_dir("rotate");
+    let dir = temp_dir!("rotate");
     std::fs::write(dir.join("box.obj"), BOX_OBJ).unwrap();
     let load = |rotate: Value, name: &str| {
         let mut s = room();
@@ -515,7 +510,7 @@ fn refused(dir: &Path, scene: &Path) -> String {
 #[test]
 fn every_bad_mesh_gets_its_own_located_error_exit_2_and_no_output() {
     for case in cases() {
-        let dir = temp_dir(&case.name.replace(' ', "_"));
+        let dir = temp_dir!(&case.name.replace(' ', "_"));
         let (name, bytes) = &case.file;
         if let Some(b) = bytes {
             std::fs::write(dir.join(name), b).unwrap();
@@ -582,7 +577,7 @@ fn every_bad_mesh_gets_its_own_located_error_exit_2_and_no_output() {
 
 #[test]
 fn a_misspelt_mesh_material_suggests_the_closest_name() {
-    let dir = temp_dir("suggest");
+    let dir = temp_dir!("suggest");
     std::fs::write(dir.join("t.ply"), tetra_ply(TETRA_V, TETRA_F)).unwrap();
     let mut s = room();
     s["meshes"] = json!([{ "file": "t.ply", "material": "magneta" }]);
@@ -592,7 +587,7 @@ fn a_misspelt_mesh_material_suggests_the_closest_name() {
 
 #[test]
 fn degenerate_mesh_triangles_are_dropped_counted_and_reported() {
-    let dir = temp_dir("degenerate");
+    let dir = temp_dir!("degenerate");
     // Face 1 repeats a vertex: zero area. Face 2 is fine.
     std::fs::write(
         dir.join("t.obj"),
@@ -659,7 +654,7 @@ fn info_describes_a_scene_and_refuses_a_bad_one_with_exit_2() {
     ] {
         assert!(stdout.contains(want), "no `{want}` in\n{stdout}");
     }
-    let dir = temp_dir("info_bad");
+    let dir = temp_dir!("info_bad");
     let mut s = room();
     s["meshes"] = json!([{ "file": "nope.obj", "material": "white" }]);
     let o = hexray(&[
@@ -813,7 +808,7 @@ fn a_scene_array_beyond_the_gpu_binding_limit_is_refused_in_a_sentence() {
 
 #[test]
 fn the_scene_sha1_covers_the_scene_file_and_each_mesh_file() {
-    let dir = temp_dir("sha1");
+    let dir = temp_dir!("sha1");
     let mesh = tetra_ply(TETRA_V, TETRA_F);
     std::fs::write(dir.join("t.ply"), &mesh).unwrap();
     let mut s = room();
@@ -843,7 +838,7 @@ fn the_scene_sha1_covers_the_scene_file_and_each_mesh_file() {
 /// `file`, after reading one byte past the limit, never until memory runs out.
 #[test]
 fn a_mesh_file_beyond_the_size_limit_is_refused_without_reading_it_all() {
-    let dir = temp_dir("endless");
+    let dir = temp_dir!("endless");
     let mut s = room();
     s["meshes"] = json!([{ "file": "/dev/zero", "material": "white" }]);
     let stderr = refused(&dir, &write_scene(&dir, "scene.json", &s));

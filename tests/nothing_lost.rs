@@ -5,17 +5,15 @@
 
 use crate::common::repo;
 use hexray::film::output::read_exr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::Duration;
+use crate::common::temp_dir;
 
 fn hexray() -> Command {
     crate::common::hexray_command()
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    crate::common::empty_temp_dir(&format!("lost-{name}"))
-}
 
 /// A small CPU render of `scene` with `args`, into `out`.
 fn render(scene: &Path, out: &Path, args: &[&str]) -> Output {
@@ -52,7 +50,7 @@ fn film_body(exr: &Path) -> Vec<u8> {
 
 #[test]
 fn a_resumed_render_is_bit_identical_to_one_render_of_the_total() {
-    let dir = temp_dir("resume");
+    let dir = temp_dir!("resume");
     for (method, scene) in [
         ("path", "scenes/cornell_box.json"),
         ("vcm", "scenes/glass_room.json"),
@@ -89,7 +87,7 @@ fn a_resumed_render_is_bit_identical_to_one_render_of_the_total() {
 
 #[test]
 fn resume_refuses_a_changed_scene() {
-    let dir = temp_dir("changed");
+    let dir = temp_dir!("changed");
     let scene = dir.join("scene.json");
     std::fs::copy(repo("scenes/cornell_box.json"), &scene).unwrap();
     let exr = dir.join("c.exr");
@@ -109,7 +107,7 @@ fn resume_refuses_a_changed_scene() {
 
 #[test]
 fn resume_refuses_a_film_from_another_render() {
-    let dir = temp_dir("pair");
+    let dir = temp_dir!("pair");
     let scene = repo("scenes/cornell_box.json");
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     ok(&render(
@@ -134,7 +132,7 @@ fn resume_refuses_a_film_from_another_render() {
 
 #[test]
 fn resume_takes_the_total_and_refuses_one_below_the_samples_taken() {
-    let dir = temp_dir("total");
+    let dir = temp_dir!("total");
     let exr = dir.join("t.exr");
     ok(&render(
         &repo("scenes/cornell_box.json"),
@@ -153,7 +151,7 @@ fn resume_takes_the_total_and_refuses_one_below_the_samples_taken() {
 
 #[test]
 fn one_sample_per_pixel_writes_no_variance() {
-    let dir = temp_dir("var1");
+    let dir = temp_dir!("var1");
     let exr = dir.join("v.exr");
     let o = hexray()
         .args([
@@ -194,7 +192,7 @@ fn signal(child: &std::process::Child, name: &str) {
 #[cfg(unix)]
 #[test]
 fn sigterm_and_sighup_end_the_render_with_its_samples_and_status_128_plus_the_signal() {
-    let dir = temp_dir("signals");
+    let dir = temp_dir!("signals");
     for (name, status) in [("TERM", 143), ("HUP", 129)] {
         let exr = dir.join(format!("{name}.exr"));
         let mut child = hexray()
@@ -235,7 +233,7 @@ fn sigterm_and_sighup_end_the_render_with_its_samples_and_status_128_plus_the_si
 #[test]
 fn a_stop_before_the_first_sample_writes_nothing() {
     use std::io::Write;
-    let dir = temp_dir("zero");
+    let dir = temp_dir!("zero");
     let exr = dir.join("z.exr");
     ok(&render(
         &repo("scenes/cornell_box.json"),
@@ -296,7 +294,7 @@ fn a_stop_before_the_first_sample_writes_nothing() {
 #[cfg(unix)]
 #[test]
 fn checkpoints_survive_a_kill_without_warning_and_resume() {
-    let dir = temp_dir("checkpoint");
+    let dir = temp_dir!("checkpoint");
     let exr = dir.join("k.exr");
     let mut child = hexray()
         .args([

@@ -315,7 +315,7 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// | vcm with the 3-D ball's merge kernel planted on the GPU | | 772 (3.4) | | |
 ///
 /// Between a few roundings and that bound lie more pixels: for vcm, 17 beyond 1e-12 on
-/// lavapipe and 74 on the H100 (docs/bench/2026-11-26_h100/same_streams_probe.txt). A GPU whose
+/// lavapipe and 74 on the H100 (docs/records/2026-11-26_h100/same_streams_probe.txt). A GPU whose
 /// `sin` and `cos` use more of WGSL's error bound could push such pixels past 1e-8 and fail this
 /// check without a fault; that would show as many pixels with small terms.
 ///
@@ -334,12 +334,12 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 ///
 /// So these checks run every method at 0.01 ([`same_streams`]), the radius of the first
 /// table's counts. At vcm's default of 0.03 the H100 flipped 49 pixels on tncg15_room and 55 on
-/// glass_room (2026-11-28, docs/bench/2026-11-28_gpu/; on glass_room with the same largest term,
+/// glass_room (2026-11-28, docs/records/2026-11-28_gpu/; on glass_room with the same largest term,
 /// 3.899e-3, as the CPU's fused hit point), beyond this allowance, with nothing wrong found in
 /// its clearance: the clearance moves only with the hit point, and it shrinks the disk, so vcm
 /// flips fewer pixels than vcm-full at the same radius. On lavapipe at 0.01 (2026-11-28): sppm
 /// 2, vcm 3 on tncg15_room and 3 on glass_room, vcm-full 3. On an NVIDIA H200 (the same driver,
-/// 2026-11-28, docs/bench/2026-11-28_gpu/same_streams_counts.txt) at 0.01: sppm 23, vcm 21 and
+/// 2026-11-28, docs/records/2026-11-28_gpu/same_streams_counts.txt) at 0.01: sppm 23, vcm 21 and
 /// 23, vcm-full 16 (34 on glass_room, which no check runs), all within the allowance but not by
 /// much; at 0.03 vcm flipped 49 and 55 pixels, the H100's counts and largest term exactly.
 ///

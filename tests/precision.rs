@@ -6,7 +6,7 @@
 //!
 //! Property: the pass-wise scheme keeps both within 1e-6 relative (f32 resolution is 6e-8; a
 //! sum of 64 terms has error below 64 · 6e-8 = 4e-6 in the worst case, typically √64 times
-//! less). The naive sum's error is printed for docs/gpu.md, not asserted.
+//! less). The naive sum's error is printed for docs/design/gpu.md, not asserted.
 
 use crate::common::load;
 use hexray::cpu::trace_path;

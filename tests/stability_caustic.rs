@@ -6,7 +6,7 @@
 //! the estimate is nevertheless unbiased and finite on both backends.
 //!
 //! Statistic: each channel's image mean against a long CPU reference of the same scene (32x32,
-//! 65536 spp, another seed; `docs/stability.sh references`), within 4 combined standard errors
+//! 65536 spp, another seed; `docs/figures/stability.sh references`), within 4 combined standard errors
 //! (false alarm 6e-5 per channel), and no sample dropped as non-finite. Only the image mean: a
 //! small block's few thousand samples may hold none of the rare caustic paths, and then its
 //! sample variance, not just its mean, is wrong, so per-block t-tests would reject a correct

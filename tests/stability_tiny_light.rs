@@ -4,7 +4,7 @@
 //! finds, become 100 times rarer and brighter: the property is that the estimate stays unbiased.
 //!
 //! Statistic: each channel's image mean against a long CPU reference of the same scene (32x32,
-//! 65536 spp, another seed; `docs/stability.sh references`), within 4 combined standard errors
+//! 65536 spp, another seed; `docs/figures/stability.sh references`), within 4 combined standard errors
 //! (false alarm 6e-5 per channel). Only the image mean, as for the caustic: the mirror paths to
 //! the light are too rare for a small block's sample variance to be right at a test's sample
 //! count, while the image's 4 million samples hold hundreds of them. The light shrunk

@@ -115,7 +115,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
     print!("{}", bench::table(&report));
     // A short row times the start-up of a render more than its throughput: on an NVIDIA H100,
     // path tracing 256x256 at 64 spp took 38 ms at 109 M camera paths/s, against 352 M/s over
-    // 6 s (docs/gpu.md): per-pass readbacks and the first pass's small dispatches weigh there.
+    // 6 s (docs/journal/2026-11-26_h100.md): per-pass readbacks and the first pass's small dispatches weigh there.
     let short: Vec<f64> = report
         .rows
         .iter()

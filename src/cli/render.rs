@@ -30,7 +30,7 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) adapter: Option<String>,
     /// Compile the kernel with naga's runtime checks (bounds checks, loop bounding). Off by
-    /// default: see docs/gpu.md for the measurement behind that choice.
+    /// default: see docs/design/gpu.md for the measurement behind that choice.
     #[arg(long)]
     pub(crate) shader_checks: bool,
     /// Where the GPU keeps the scene arrays (default: uniform buffers on CPU adapters when the

@@ -62,7 +62,7 @@ pub fn all_files() -> Vec<&'static str> {
 /// What the kernel is specialised to: the lengths of the scene arrays (the uniform bindings'
 /// `LEN_*` constants) and the traversal stack's size (`STACK_SIZE` in bvh.wgsl: the traversal
 /// pushes at most three nodes per level, and lavapipe keeps a private stack sized to the scene
-/// in registers where a fixed 64-entry one spilled to memory; docs/gpu.md).
+/// in registers where a fixed 64-entry one spilled to memory; docs/design/gpu.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ArrayLengths {
     pub triangles: usize,

@@ -27,7 +27,7 @@ pub struct LightSample {
 /// last row if none before it), so row k is chosen with probability pmf_k. A binary search
 /// whose steps depend only on the table's length: each halving keeps the upper half by a
 /// select, not a branch, since which half holds `u` is a coin toss that a branch mispredicts
-/// half the time (cachegrind: 8 % of a cornell_box render's mispredicts, docs/performance.md).
+/// half the time (cachegrind: 8 % of a cornell_box render's mispredicts, docs/journal/2026-11-27_branches.md).
 #[inline]
 pub fn choose_emitter(scene: &FlatScene, u: f32) -> usize {
     first_above(scene.emitters.len(), |row| scene.emitters[row].cdf, u)

@@ -39,7 +39,7 @@ impl Method {
     /// time on the three reference scenes on each backend (docs/methods.md, "The default
     /// method"), the GPU backend's judged on a hardware GPU: on an NVIDIA H200 at 256x256
     /// (6 s) vcm had 0.75 of path's relMSE by the geometric mean, vcm-full 0.91 and sppm 2.47
-    /// (docs/gpu.md); on lavapipe (30 s) vcm and sppm are level (0.126 and 0.123, one render
+    /// (docs/journal/2026-11-27_h200.md); on lavapipe (30 s) vcm and sppm are level (0.126 and 0.123, one render
     /// each). Consistent, not unbiased: the summary line says so, and `hexray reference` keeps
     /// path tracing.
     pub const DEFAULT: Method = Method::Vcm;

@@ -5,7 +5,7 @@
 //! it samples is the real one), BSDF sampling meets it as rarely as it meets the light itself,
 //! and a light subpath reaches the wall by way of the mirror only with the few of its
 //! directions that meet the mirror. On tncg15_room, whose mirror wall doubles the room's light,
-//! that light is noisy for every method (docs/performance.md). Reflecting the light point y of
+//! that light is noisy for every method (docs/journal/2026-11-25_mirror_share.md). Reflecting the light point y of
 //! next-event estimation in the mirror's plane gives a point y' of the same area density, and
 //! the path x → m → y through the point m where the segment x y' crosses the mirror is a
 //! next-event path of its own: its geometry term is that of x and y' (|x − y'| = |x − m| +
@@ -149,7 +149,7 @@ fn triangle_bounds(t: &Triangle) -> (Vec3, Vec3) {
 /// (BDPT's strategies) and does not `merge`, in a scene with planar mirrors. So BDPT does, and
 /// vcm with the radius 0, which is BDPT. VCM that merges does not: its merges at the diffuse
 /// vertex after the mirror already take that light with little noise, and on 2 cores the
-/// strategy's closest-hit rays cost about what its lower variance saves (docs/performance.md);
+/// strategy's closest-hit rays cost about what its lower variance saves (docs/journal/2026-11-26_planar_mirrors.md);
 /// nor do path tracing, light tracing and SPPM.
 #[inline]
 pub fn takes_mirror_light(connects: bool, merges: bool, scene: &FlatScene) -> bool {

@@ -52,6 +52,19 @@ pub fn empty_temp_dir(tag: &str) -> PathBuf {
     d
 }
 
+/// `temp_dir!(name)`: an empty folder for one test's files, named after the calling test file
+/// (its module) and `name`, so that no two files' tests share one.
+macro_rules! temp_dir {
+    ($name:expr) => {
+        $crate::common::empty_temp_dir(&format!(
+            "{}-{}",
+            module_path!().rsplit("::").next().unwrap(),
+            $name
+        ))
+    };
+}
+pub(crate) use temp_dir;
+
 pub fn load(rel: &str) -> (Scene, FlatScene) {
     let scene = Scene::load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
     let flat = FlatScene::build(&scene);

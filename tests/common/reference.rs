@@ -1,5 +1,5 @@
 //! Long renders committed as references (`tests/data/references/stability/`, made by
-//! `docs/stability.sh references`), and the statistic that compares a render against one.
+//! `docs/figures/stability.sh references`), and the statistic that compares a render against one.
 
 use super::repo;
 use hexray::analysis::stats::{welch_blocks, MeanImage};

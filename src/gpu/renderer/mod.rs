@@ -333,7 +333,7 @@ impl GpuRenderer {
     /// rows as that allows (a multiple of the workgroup height, at least one workgroup): the
     /// lanes then have `count` samples each to regenerate their paths with (`render` in
     /// `shaders/path.wgsl`). On lavapipe, 256x256, 64 spp, this gave 1.4 - 1.7x the camera
-    /// paths/s of dispatches of one sample over more rows (docs/gpu.md). The smallest dispatch,
+    /// paths/s of dispatches of one sample over more rows (docs/journal/2026-11-25_regeneration.md). The smallest dispatch,
     /// one workgroup of rows with 64 samples, can exceed the time target on a slow adapter
     /// (about 0.5 s at 256 pixels wide on lavapipe, which has no watchdog); a real GPU's budget
     /// holds many such dispatches.
