@@ -1,15 +1,16 @@
 // The camera pass of bidirectional path tracing: `src/cpu/bdpt.rs` again, with the same names,
 // steps and step comments. One camera subpath per pixel (n_c where the pixel sees a mirror or
-// glass), and at each of its vertices every strategy that ends there: the emitter it hits
-// (s = 0), next-event estimation (s = 1) and a connection to each stored vertex of the pixel's
-// light subpath (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray
-// rouletted by its contribution; BDPT's next-event estimation also aims at the light's image in
-// each planar mirror, and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With
-// photons, the camera pass of the merging methods: vcm-full adds the merges at every diffuse
-// vertex (hash_grid.wgsl); vcm ends the camera subpath at its first diffuse vertex, after its
-// connections and merge there; SPPM merges at the first diffuse vertex alone. Here each visibility ray is traced where it is met; the CPU keeps a tile's visibility
-// rays and the terms they multiply (`CameraTerms`), traces the rays together in SIMD packets and
-// then sums each subpath's terms in the order met, which gives the same sums.
+// glass), and at each of its vertices every strategy that ends there: the emitter it hits (s = 0),
+// next-event estimation (s = 1) and a connection to each stored vertex of the pixel's light subpath
+// (s >= 2), each with its MIS weight (subpath.wgsl) and its visibility ray rouletted by its
+// contribution; BDPT's next-event estimation also aims at the light's image in each planar mirror,
+// and takes the paths it makes alone (step 4b, planar_mirror.wgsl). With photons, the camera pass
+// of the merging methods: vcm-full adds the merges at every diffuse vertex (hash_grid.wgsl); vcm
+// ends the camera subpath at its first diffuse vertex, after its connections and merge there; SPPM
+// merges at the first diffuse vertex alone. Here each visibility ray is traced where it is met; the
+// CPU keeps a tile's visibility rays and the terms they multiply (`CameraTerms`), traces the rays
+// together in SIMD packets and then sums each subpath's terms in the order met, which gives the
+// same sums.
 
 // Whether the method takes BDPT's strategies (BDPT, VCM; not SPPM).
 fn connects() -> bool {
@@ -304,12 +305,13 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
     return radiance;
 }
 
-// One invocation per pixel of the dispatch's tile, for one iteration: the pixel's camera
-// subpath, connected to the light subpath of the same index, which the light pass of this wave
-// has just traced (light subpaths frame.path_origin .. + frame.path_count). Its radiance waits in
-// `camera_radiance` for the resolve pass, which adds the splats: stored by the pixel's first
-// camera pass of the iteration, added to by the later waves of a merging iteration. The light vertices the wave asked for are recorded in the iteration's image cell: if
-// they overflowed the pool, the resolve pass drops the iteration and the host traces it again.
+// One invocation per pixel of the dispatch's tile, for one iteration: the pixel's camera subpath,
+// connected to the light subpath of the same index, which the light pass of this wave has just
+// traced (light subpaths frame.path_origin .. + frame.path_count). Its radiance waits in
+// `camera_radiance` for the resolve pass, which adds the splats: stored by the pixel's first camera
+// pass of the iteration, added to by the later waves of a merging iteration. The light vertices the
+// wave asked for are recorded in the iteration's image cell: if they overflowed the pool, the
+// resolve pass drops the iteration and the host traces it again.
 @compute @workgroup_size(8, 8, 1)
 fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let asked = atomicLoad(&tallies[vertex_counter()]);

@@ -1,5 +1,5 @@
-// What the bidirectional methods share: `src/transport/subpath.rs`, line for line. The stored light vertex
-// and Georgiev et al.'s recursive MIS quantities (power heuristic, beta = 2, without Russian
+// What the bidirectional methods share: `src/transport/subpath.rs`, line for line. The stored light
+// vertex and Georgiev et al.'s recursive MIS quantities (power heuristic, beta = 2, without Russian
 // roulette's survival probabilities; src/transport/subpath.rs says why).
 
 // A vertex of a light subpath on a non-specular surface, stored for the camera subpaths.
@@ -27,8 +27,8 @@ struct LightVertex {
 
 const NO_VERTEX: u32 = 0xffffffffu;
 
-// The bounce from which BDPT's and VCM's light subpaths are rouletted (src/transport/subpath.rs says why
-// it is earlier than the path tracer's RR_START_BOUNCE).
+// The bounce from which BDPT's and VCM's light subpaths are rouletted (src/transport/subpath.rs
+// says why it is earlier than the path tracer's RR_START_BOUNCE).
 const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1u;
 
 // The light pass's stored vertices (a pool shared by the light subpaths of one wave, each

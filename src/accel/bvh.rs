@@ -393,13 +393,13 @@ pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<Sur
     Some(surface_hit(scene, ray, c))
 }
 
-/// Whether a hit at `t` on primitive `prim` (its id as `prims` holds it: a triangle's index, or
-/// a sphere's with the sphere bit) replaces `best`, the nearest so far (`t_limit` its t, or the
-/// ray's end): nearer, or as near and of a lower id. The scalar traversal, the packets of
-/// [`crate::accel::packet`] and `shaders/bvh.wgsl` visit nodes in different orders; with this rule they
-/// keep the same primitive of two met at the same t. One case remains: once the first sets
-/// `t_limit`, a leaf whose box's entry distance rounds above that t is skipped, so where the
-/// other lies in such a leaf the order still decides.
+/// Whether a hit at `t` on primitive `prim` (its id as `prims` holds it: a triangle's index, or a
+/// sphere's with the sphere bit) replaces `best`, the nearest so far (`t_limit` its t, or the ray's
+/// end): nearer, or as near and of a lower id. The scalar traversal, the packets of
+/// [`crate::accel::packet`] and `shaders/bvh.wgsl` visit nodes in different orders; with this rule
+/// they keep the same primitive of two met at the same t. One case remains: once the first sets
+/// `t_limit`, a leaf whose box's entry distance rounds above that t is skipped, so where the other
+/// lies in such a leaf the order still decides.
 #[inline]
 pub(crate) fn nearer(t: f32, prim: u32, t_limit: f32, best: Option<Candidate>) -> bool {
     t < t_limit || (t == t_limit && best.is_some_and(|b| prim < b.prim))
@@ -420,18 +420,18 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
     hit
 }
 
-/// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared
-/// four-wide tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the
-/// four-wide tree it is made of, docs/performance.md). At each node the children's boxes are
-/// tested at once. The leaves among the hit children are tested first, so that their hits
-/// lower t_limit before anything is pushed; then the nearest hit interior child is visited next and the others are
-/// pushed with their entry distances: a missed child is never pushed and a pushed one that a
+/// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared four-wide
+/// tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the four-wide tree it is
+/// made of, docs/journal/2026-11-25_wide_nodes.md). At each node the children's boxes are tested at
+/// once. The leaves among the hit children are tested first, so that their hits lower t_limit
+/// before anything is pushed; then the nearest hit interior child is visited next and the others
+/// are pushed with their entry distances: a missed child is never pushed and a pushed one that a
 /// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
-/// distance: sorting all four was measured slower (the keys' lanes travel through memory) for
-/// the little culling it adds (docs/performance.md). A leaf's triangles are tested four at a
-/// time ([`intersect_triangles4`], bit for bit the scalar test per lane; 15 – 18 % less render
-/// time than one at a time, docs/performance.md) and their hits reported in entry order, so the
-/// result is the scalar traversal's. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
+/// distance: sorting all four costs more (the keys' lanes travel through memory) than the little
+/// culling it adds. A leaf's triangles are tested four at a time ([`intersect_triangles4`], bit for
+/// bit the scalar test per lane; 15 – 18 % less render time than one at a time) and their hits
+/// reported in entry order, so the result is the scalar traversal's. Both measured in
+/// docs/journal/2026-11-23_cpu_traversal.md. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
 /// what a hit means; it returns true to stop at once (any-hit).
 #[inline]
 fn traverse(

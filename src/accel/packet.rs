@@ -1,23 +1,23 @@
-//! Ray packets: up to eight rays traversed together, one per lane of a 256-bit vector (issue 17).
+//! Ray packets: up to eight rays traversed together, one per lane of a 256-bit vector.
 //!
 //! The CPU's scalar traversal ([`crate::accel::bvh`]) pays, per ray, for a chain of dependent
-//! test-decide-load steps and their mispredicted branches (docs/performance.md). A packet walks
-//! the same eight-wide tree once for all its rays: a child is entered when any active lane's slab
-//! test passes, and a leaf's triangles are each tested against the eight rays at once, the
-//! triangle's coordinates broadcast to every lane. Branches then depend on eight rays' union, not
-//! on one ray's path, and the arithmetic fills the vector. The union costs work on incoherent
+//! test-decide-load steps and their mispredicted branches (docs/journal/2026-11-26_packets.md). A
+//! packet walks the same eight-wide tree once for all its rays: a child is entered when any active
+//! lane's slab test passes, and a leaf's triangles are each tested against the eight rays at once,
+//! the triangle's coordinates broadcast to every lane. Branches then depend on eight rays' union,
+//! not on one ray's path, and the arithmetic fills the vector. The union costs work on incoherent
 //! rays: on the reference scenes a packet of diffuse bounce rays takes 0.79 – 0.88 of the scalar
-//! time per ray, a packet of shadow rays toward the lights 0.32 – 0.39
-//! (`examples/packet_rays.rs`, docs/performance.md).
+//! time per ray, a packet of shadow rays toward the lights 0.32 – 0.39 (`examples/packet_rays.rs`;
+//! docs/design/cpu.md, "Packets").
 //!
 //! Each lane's arithmetic is the scalar test's, operation for operation and with the same NaN
 //! behaviour of every comparison and min/max ([`crate::math::geometry::intersect_triangles4`],
-//! [`crate::math::geometry::intersect_boxes4`], [`crate::math::geometry::intersect_sphere`]), so a packet
-//! reports each ray's hits with the same t and barycentrics, and the same nearest: of hits at the
-//! same t, both keep the lower primitive id ([`crate::accel::bvh::nearer`], which says where the order
-//! can still decide). Each lane's nearest so far lives in vectors and is replaced by blends, and
-//! a node's eight slab tests come before its children are visited, so that few branches depend
-//! on which lanes hit (docs/performance.md).
+//! [`crate::math::geometry::intersect_boxes4`], [`crate::math::geometry::intersect_sphere`]), so a
+//! packet reports each ray's hits with the same t and barycentrics, and the same nearest: of hits
+//! at the same t, both keep the lower primitive id ([`crate::accel::bvh::nearer`], which says where
+//! the order can still decide). Each lane's nearest so far lives in vectors and is replaced by
+//! blends, and a node's eight slab tests come before its children are visited, so that few branches
+//! depend on which lanes hit (docs/journal/2026-11-27_branches.md).
 //!
 //! Needs AVX (checked at run time, so the portable build uses it too); elsewhere each ray takes
 //! the scalar traversal.
@@ -454,7 +454,7 @@ mod avx {
         mut leaf: impl FnMut(&mut Packet, &mut __m256, usize, usize, i32, __m256),
     ) {
         // Interior nodes still to visit: at most seven net pushes a level, as in `bvh`.
-        // (Not an array zeroed per traversal: at 1.7 KB, writing it cost more than a small
+        // (Not an array zeroed per traversal: at 1.7 KB, writing it costs more than a small
         // tree's whole traversal of a shadow packet.)
         let mut stack = arrayvec::ArrayVec::<u32, { WIDE_STACK_SIZE + 1 }>::new();
         stack.push(0);

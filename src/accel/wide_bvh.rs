@@ -2,12 +2,12 @@
 //! traverses) collapsed once more, so that one node visit tests up to eight child boxes.
 //!
 //! The traversal's cost on the CPU is the latency of each node's test-decide-load chain, not the
-//! instruction count (docs/performance.md): a node of eight children is two independent
-//! four-wide slab tests, which the core runs side by side in about the time of one, and the
-//! tree has about half the levels. The leaves are the four-wide tree's own (the same `prims`
-//! ranges, starting at multiples of four for the triangle packs), in the same slot order, so
-//! a traversal reports the same hits, and the nearest is the same primitive (ties in t go to
-//! the lower primitive id, `bvh::nearer`).
+//! instruction count (docs/journal/2026-11-23_cpu_traversal.md): a node of eight children is two
+//! independent four-wide slab tests, which the core runs side by side in about the time of one, and
+//! the tree has about half the levels. The leaves are the four-wide tree's own (the same `prims`
+//! ranges, starting at multiples of four for the triangle packs), in the same slot order, so a
+//! traversal reports the same hits, and the nearest is the same primitive (ties in t go to the
+//! lower primitive id, `bvh::nearer`).
 
 use crate::layout::cpu::ROWS;
 pub use crate::layout::cpu::WIDTH;

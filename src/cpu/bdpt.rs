@@ -1,26 +1,25 @@
-//! The camera pass of bidirectional path tracing (Veach's thesis, ch. 10): one camera subpath
-//! per pixel (n_c of them where the pixel sees a mirror or glass, `subpath::camera_subpaths`),
-//! and at each of its vertices every strategy that ends there: the emitter it hits (s = 0),
-//! next-event estimation (s = 1) and a connection to each stored vertex of the light subpath
-//! traced for this pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light
-//! pass's splats (`light_path.rs`). Each contribution carries its MIS weight over every
-//! strategy that can make its path (`crate::transport::subpath`), so the sum over strategies is unbiased.
-//! Where the scene has planar mirrors, BDPT's next-event estimation also aims at the light's
-//! image in each (step 4b), and the paths it makes are its alone, a partition of the weights
-//! (`crate::transport::planar_mirror`).
-//! The visibility rays of next-event estimation and of the connections are rouletted by their
-//! contribution (`subpath::shadow_survival`).
+//! The camera pass of bidirectional path tracing (Veach's thesis, ch. 10): one camera subpath per
+//! pixel (n_c of them where the pixel sees a mirror or glass, `subpath::camera_subpaths`), and at
+//! each of its vertices every strategy that ends there: the emitter it hits (s = 0), next-event
+//! estimation (s = 1) and a connection to each stored vertex of the light subpath traced for this
+//! pixel in the light pass (s ≥ 2). The strategies with t = 1 are the light pass's splats
+//! (`light_path.rs`). Each contribution carries its MIS weight over every strategy that can make
+//! its path (`crate::transport::subpath`), so the sum over strategies is unbiased. Where the scene
+//! has planar mirrors, BDPT's next-event estimation also aims at the light's image in each (step
+//! 4b), and the paths it makes are its alone, a partition of the weights
+//! (`crate::transport::planar_mirror`). The visibility rays of next-event estimation and of the
+//! connections are rouletted by their contribution (`subpath::shadow_survival`).
 //!
 //! The same pass, with photons, is the camera pass of the merging methods. VCM (Georgiev et al.
-//! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the
-//! iteration (of any pixel's light subpath) within the radius r, found in the hash grid
-//! (`crate::accel::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its two
-//! sides added here: `merge_camera_share` once per query, `merge_light_share` per photon, which
-//! the CPU keeps in a `PhotonRecord`; the same arithmetic in the same order). With
-//! the radius 0 it is BDPT, bit for bit. SPPM is the special case without connections
-//! (Georgiev's PPM, as Knaus and Zwicker's probabilistic PPM): the camera subpath follows
-//! mirrors and glass to its first diffuse vertex, merges there with weight 1 and stops; it
-//! keeps the emission it meets on the way, the only paths merging cannot make.
+//! 2012) adds at every diffuse vertex the strategy that merges: every light vertex of the iteration
+//! (of any pixel's light subpath) within the radius r, found in the hash grid
+//! (`crate::accel::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its
+//! two sides added here: `merge_camera_share` once per query, `merge_light_share` per photon, which
+//! the CPU keeps in a `PhotonRecord`; the same arithmetic in the same order). With the radius 0 it
+//! is BDPT, bit for bit. SPPM is the special case without connections (Georgiev's PPM, as Knaus and
+//! Zwicker's probabilistic PPM): the camera subpath follows mirrors and glass to its first diffuse
+//! vertex, merges there with weight 1 and stops; it keeps the emission it meets on the way, the
+//! only paths merging cannot make.
 //!
 //! `shaders/bdpt.wgsl` is this function again, with the same names, steps and step comments.
 //!
@@ -65,7 +64,7 @@ pub struct CameraPass<'a> {
     /// N: light subpaths per iteration (one per pixel).
     pub n_light_paths: u32,
     pub faults: Faults,
-    /// τ of the Russian roulette on visibility rays (`subpath::shadow_threshold`).
+    /// τ of the Russian roulette on visibility rays (`shadow_probe::shadow_threshold`).
     pub shadow_threshold: f32,
     /// Whether to take BDPT's strategies: emission weighed by MIS, next-event estimation and
     /// the connections (BDPT, VCM; not SPPM).
@@ -92,10 +91,10 @@ pub struct Photons<'a> {
 
 /// What a merge reads of a light vertex (step 6), in the grid's entry order: 32 bytes, two to a
 /// cache line, beside the entries a query has just read. The CPU alone keeps this copy. A query
-/// that read the 80-byte `LightVertex` at the index its entry names waited on a cache miss per
-/// photon; at 512x512 (four times the photons a query finds at 256x256) that load held a third
-/// of the camera pass's time (docs/performance.md). The arithmetic is the same, so the images
-/// are bit for bit those of reading the vertex.
+/// that reads the 80-byte `LightVertex` at the index its entry names waits on a cache miss per
+/// photon; at 512x512 (four times the photons a query finds at 256x256) that load holds a third
+/// of the camera pass's time (docs/journal/2026-11-25_merge_queries.md). The arithmetic is the
+/// same, so the images are bit for bit those of reading the vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub struct PhotonRecord {

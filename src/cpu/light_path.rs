@@ -11,9 +11,9 @@
 //! Light tracing alone (`--method light`) is this pass with every splat weighted 1: an unbiased
 //! estimate of everything the camera sees on non-specular surfaces, and nothing of what it sees
 //! through a mirror or glass (a light subpath can never be connected to the camera through a
-//! specular bounce; those surfaces stay black). For BDPT and VCM the splats carry their MIS
-//! weights against every other strategy (`crate::transport::subpath`), and the vertices are stored for
-//! the camera pass to connect to and (VCM, SPPM) merge with; SPPM only stores them.
+//! specular bounce; those surfaces stay black). For BDPT and VCM the splats carry their MIS weights
+//! against every other strategy (`crate::transport::subpath`), and the vertices are stored for the
+//! camera pass to connect to and (VCM, SPPM) merge with; SPPM only stores them.
 //!
 //! The light subpath carries flux (importance transport): it starts with α = Le / p_A at the
 //! light point, and each bounce multiplies it by the adjoint BSDF's f · |cos| / pdf
@@ -85,11 +85,12 @@ pub struct LightPass<'a> {
     pub local_radius: bool,
 }
 
-/// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU
-/// traces a chunk's splat rays together, eight at a time in SIMD lanes
+/// A splat whose visibility ray has survived its roulette and waits to be traced: the CPU traces a
+/// chunk's splat rays together, eight at a time in SIMD lanes
 /// ([`crate::accel::packet::occluded_all`]: the rays of a chunk all end at the eye), and splats the
-/// visible ones ([`add_splats`]). Splat sums do not depend on their order (`crate::transport::splat`), so
-/// the image is bit for bit that of splatting each at once, as `shaders/light_path.wgsl` does.
+/// visible ones ([`add_splats`]). Splat sums do not depend on their order
+/// (`crate::transport::splat`), so the image is bit for bit that of splatting each at once, as
+/// `shaders/light_path.wgsl` does.
 #[derive(Clone, Copy, Debug)]
 pub struct PendingSplat {
     pub pixel: u32,

@@ -180,9 +180,9 @@ pub const MAX_PLANAR_MIRRORS: u32 = 4;
 /// Marks a triangle on no planar mirror (`Triangle::planar_mirror`).
 pub const NO_PLANAR_MIRROR: u32 = u32::MAX;
 
-/// A planar mirror (`crate::transport::planar_mirror`): the plane n · p = d of a set of mirror triangles
-/// of one material, their bounds, and how far from the plane a vertex of theirs may lie. Three
-/// vec4s; the shader reads them from `Frame::planar_mirrors`.
+/// A planar mirror (`crate::transport::planar_mirror`): the plane n · p = d of a set of mirror
+/// triangles of one material, their bounds, and how far from the plane a vertex of theirs may lie.
+/// Three vec4s; the shader reads them from `Frame::planar_mirrors`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct PlanarMirror {

@@ -1,15 +1,15 @@
 //! Eight values in lanes: the arithmetic of a path vertex for eight paths at once.
 //!
-//! The scalar shading of a path vertex is a chain of dependent square roots, divisions and
-//! hashes whose latency, not its instruction count, bounds the path tracer
-//! (docs/performance.md). Eight independent paths side by side fill the vector units instead:
-//! each function here is its scalar namesake's arithmetic, operation for operation in the same
-//! order, on structure-of-arrays values of the `wide` crate's eight-lane vectors (one AVX
+//! The scalar shading of a path vertex is a chain of dependent square roots, divisions and hashes
+//! whose latency, not its instruction count, bounds the path tracer
+//! (docs/journal/2026-11-27_lanes.md). Eight independent paths side by side fill the vector units
+//! instead: each function here is its scalar namesake's arithmetic, operation for operation in the
+//! same order, on structure-of-arrays values of the `wide` crate's eight-lane vectors (one AVX
 //! register each where the build targets AVX, as the host build does; two SSE2 halves in the
 //! portable build). No operation is fused or reordered, so every lane's result is the scalar
-//! function's bit for bit (the tests below, on values that include zeros of both signs,
-//! subnormals, infinities and NaN where the scalar functions accept them). The compiler's own
-//! vectorisation of plain loops over arrays was tried first: it left most of the work scalar.
+//! function's bit for bit (the tests below, on values that include zeros of both signs, subnormals,
+//! infinities and NaN where the scalar functions accept them). The compiler's own vectorisation of
+//! plain loops over arrays leaves most of this work scalar.
 
 use glam::Vec3;
 use std::f32::consts::FRAC_PI_2;
@@ -406,8 +406,8 @@ pub fn offset_ray_origin(p: &V8, p_err: &V8, n: &V8, w: &V8) -> V8 {
     step_away(&p.add(&offset), &offset)
 }
 
-/// [`crate::math::geometry::step_away_scalar`] in lanes: each coordinate stepped one ulp the way its
-/// offset points, unchanged where the offset is 0 or NaN or the step would leave an infinity
+/// [`crate::math::geometry::step_away_scalar`] in lanes: each coordinate stepped one ulp the way
+/// its offset points, unchanged where the offset is 0 or NaN or the step would leave an infinity
 /// (the masks of [`crate::math::geometry::step_away`], eight lanes wide).
 #[inline(always)]
 pub fn step_away(po: &V8, offset: &V8) -> V8 {

@@ -17,13 +17,13 @@
 //!
 //! The sum is kept as Georgiev et al.'s recursive quantities ("Light transport simulation with
 //! vertex connection and merging", SIGGRAPH Asia 2012, and its technical report, the form of
-//! SmallVCM): at every subpath vertex two numbers, d_vcm and d_vc, from which the partial sum
-//! over all strategies on that subpath's side follows with the one or two densities that only
-//! the connection knows, and a third, d_vm, for the strategies that merge (vertex merging,
-//! `crate::transport::merging`). Merging enters through two constants of the iteration ([`MergeMis`]):
-//! η = π r² N, the ratio of a merge's density to a connection's (the N light subpaths of an
-//! iteration each offer a photon within the disk of area π r², Georgiev et al., eq. 20 of the
-//! report), as vm = η^β and vc = η^−β; without merging both are 0 and the quantities are
+//! SmallVCM): at every subpath vertex two numbers, d_vcm and d_vc, from which the partial sum over
+//! all strategies on that subpath's side follows with the one or two densities that only the
+//! connection knows, and a third, d_vm, for the strategies that merge (vertex merging,
+//! `crate::transport::merging`). Merging enters through two constants of the iteration
+//! ([`MergeMis`]): η = π r² N, the ratio of a merge's density to a connection's (the N light
+//! subpaths of an iteration each offer a photon within the disk of area π r², Georgiev et al., eq.
+//! 20 of the report), as vm = η^β and vc = η^−β; without merging both are 0 and the quantities are
 //! BDPT's exactly (every vm and vc term adds or multiplies a 0).
 //!
 //! VCM at the first diffuse vertex (`vcm`, the default; `vcm-full` is Georgiev et al.'s as
@@ -44,7 +44,7 @@
 //! the first diffuse vertex carries most of the weight of the paths through it, and a camera
 //! subpath that goes on pays for connections and merges further on, whose share is small and
 //! noisy (a one-sample final gather); ending there doubles the iterations in the same time
-//! (docs/performance.md, "VCM at the first diffuse vertex").
+//! (docs/journal/2026-11-27_first_diffuse.md).
 //!
 //! A radius of the vertex (`vcm`): since vcm's camera subpaths end at their first diffuse vertex,
 //! a path has exactly one merging strategy, the merge at that vertex xd, and η enters no
@@ -76,26 +76,16 @@ use crate::transport::method::Method;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass,
-/// for BDPT (and VCM without merging, which is BDPT) and for SPPM (not measured for SPPM, whose
-/// camera subpaths are cheap: they end at their first diffuse vertex). There the camera subpath is all
+/// Camera subpaths per iteration in a pixel whose centre ray first meets a mirror or glass, for
+/// BDPT (and VCM without merging, which is BDPT) and for SPPM (not measured for SPPM, whose camera
+/// subpaths are cheap: they end at their first diffuse vertex). There the camera subpath is all
 /// BDPT has: light tracing cannot reach the pixel, and what is seen in the mirror (a wall lit
-/// through the mirror: camera - mirror - diffuse - mirror - light) is found by the camera
-/// subpath alone, as in path tracing. With one camera subpath per iteration those pixels would
-/// get a third of path tracing's samples at equal time (an iteration costs about three
-/// path-traced samples), so they take several. Measured by editing this constant (tncg15_room
-/// and glass_room, 256x256, 30 s on 2 cores, seed 9, relMSE against the BDPT references of
-/// `docs/methods.sh references`, whose own noise is 2.1e-4 and 1.4e-4):
-///
-/// | camera subpaths | 1 | 3 | 5 | 8 |
-/// | --- | --- | --- | --- | --- |
-/// | tncg15_room | 5.9e-3 | 3.2e-3 | 2.7e-3 | 2.6e-3 |
-/// | glass_room | 3.6e-3 | 2.0e-3 | 1.8e-3 | 1.7e-3 |
-///
-/// 5 and 8 are within the runs' noise of each other; 5 leaves more iterations (light subpaths)
-/// to the rest of the image. Measured again for BDPT on 2026-11-26 (seed 11, the H100's
-/// references, their noise subtracted): 5 still leads, 3 and 2 give 1.16 and 1.44 times its
-/// relMSE on tncg15_room, 1.07 and 1.27 on glass_room.
+/// through the mirror: camera - mirror - diffuse - mirror - light) is found by the camera subpath
+/// alone, as in path tracing. With one camera subpath per iteration those pixels would get a third
+/// of path tracing's samples at equal time (an iteration costs about three path-traced samples), so
+/// they take several. With 5, BDPT's relMSE is 0.46 of 1's on tncg15_room and 0.50 on glass_room
+/// (256x256, 30 s on 2 cores, seed 9, set by editing this constant); 8 is within the runs' noise of
+/// 5, and 5 leaves more iterations (light subpaths) to the rest of the image.
 pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 
 /// Camera subpaths per iteration in such a pixel for VCM with merging
@@ -103,19 +93,9 @@ pub const SPECULAR_CAMERA_SUBPATHS: u32 = 5;
 /// mirror what BDPT lacks there: its first diffuse vertex behind the mirror merges the light
 /// that arrived by way of the mirror or glass, so a few camera subpaths do what five do
 /// without merging, and each one saved leaves time to more iterations for the whole image
-/// (a camera subpath with its connections and merges is most of an iteration's cost). Measured
-/// on 2026-11-26 by editing the constant (256x256, 30 s on 2 cores, seeds 11, 12 and 13, mean
-/// relMSE against the H100's references minus their noise, and its ratio to 5's):
-///
-/// | camera subpaths | 1 (seed 11) | 2 | 3 | 5 |
-/// | --- | --- | --- | --- | --- |
-/// | tncg15_room | 1.52e-3 (0.97) | 1.40e-3 (0.90) | 1.45e-3 (0.93) | 1.57e-3 |
-/// | glass_room | 1.66e-3 (1.06) | 1.48e-3 (0.95) | 1.46e-3 (0.93) | 1.57e-3 |
-///
-/// 2 and 3 are within the runs' noise of each other; 2 costs less. Measured again when vcm's
-/// camera subpaths came to end at their first diffuse vertex, which makes them cheap (build
-/// cdd2a5f, seed 11, the same settings, against the run's own 2): 3 and 5 gave 1.02 and 1.06 of
-/// 2's relMSE on tncg15_room, 0.99 and 0.99 on glass_room. 2 stays.
+/// (a camera subpath with its connections and merges is most of an iteration's cost). With 2,
+/// vcm's relMSE is 0.90 of 5's on tncg15_room and 0.95 on glass_room (256x256, 30 s on 2 cores,
+/// seeds 11 – 13, set by editing the constant); 3 is within the runs' noise of 2 and costs more.
 pub const SPECULAR_CAMERA_SUBPATHS_MERGING: u32 = 2;
 
 /// n_c where a pixel's centre ray first meets a mirror or glass, for `method` with the initial
@@ -160,23 +140,20 @@ pub fn camera_subpaths(specular: &[bool], count: u32) -> Vec<u32> {
         .collect()
 }
 
-/// The shadow-ray threshold as a share of the image's mean radiance (see [`shadow_survival`]).
-/// Measured as [`SPECULAR_CAMERA_SUBPATHS`] was, with 5 camera subpaths:
-///
-/// | fraction | 0 (no roulette) | 0.05 | 0.1 | 0.2 |
-/// | --- | --- | --- | --- | --- |
-/// | tncg15_room | 3.5e-3 | 2.6e-3 | 2.7e-3 | 3.1e-3 |
-/// | glass_room | 2.2e-3 | 1.8e-3 | 1.8e-3 | 2.3e-3 |
+/// The shadow-ray threshold as a share of the image's mean radiance (see [`shadow_survival`]):
+/// 0.1. Measured as [`SPECULAR_CAMERA_SUBPATHS`] was, with 5 camera subpaths: BDPT's relMSE is
+/// 2.7e-3 on tncg15_room and 1.8e-3 on glass_room, against 3.5e-3 and 2.2e-3 without the
+/// roulette; 0.05 does about as well, 0.2 worse.
 pub const SHADOW_RR_FRACTION: f32 = 0.1;
 
 /// Russian roulette on the visibility rays of BDPT's connections (next-event estimation, the
 /// connections to light vertices, the splats to the camera): a connection whose unoccluded,
-/// MIS-weighted contribution c (its largest channel) is below the threshold τ traces its ray
-/// with probability c / τ and is divided by it, which keeps it unbiased
-/// (E[V c / q · 1{u < q}] = V c) and adds at most τ c of variance. Most connections of a room
-/// carry little (on tncg15_room three quarters carry under 1 % of a pixel's value, together 27 %
-/// of the light), and their rays were half of an iteration's rays. Returns the probability of
-/// tracing the ray (1 above the threshold, and where τ is 0).
+/// MIS-weighted contribution c (its largest channel) is below the threshold τ traces its ray with
+/// probability c / τ and is divided by it, which keeps it unbiased (E[V c / q · 1{u < q}] = V c)
+/// and adds at most τ c of variance. Most connections of a room carry little (on tncg15_room three
+/// quarters carry under 1 % of a pixel's value, together 27 % of the light), and without the
+/// roulette their rays are half of an iteration's rays. Returns the probability of tracing the ray
+/// (1 above the threshold, and where τ is 0).
 #[inline]
 pub fn shadow_survival(contribution: Vec3, threshold: f32) -> f32 {
     let c = contribution.max_element();
@@ -199,10 +176,9 @@ pub fn mis(x: f32) -> f32 {
 /// is 0 / 0, later inf, and the next specular bounce, whose outgoing cosine is as small,
 /// multiplies inf by 0, so every weight after it would be NaN. Such hits are met with
 /// probability of the order of 1e-19 by any sampled direction, and exactly never where the
-/// cosine is 0, so ending the subpath there changes no estimate that an f32 can resolve (the
-/// NaN samples were dropped, which biased the pixel the same way and lost the sample's other
-/// strategies). Written so that a NaN cosine ends the subpath too. `tests/stability_tangent.rs`
-/// renders a camera whose every ray is tangent to a mirror sphere.
+/// cosine is 0, so ending the subpath there changes no estimate that an f32 can resolve.
+/// Written so that a NaN cosine ends the subpath too. `tests/stability_tangent.rs` renders a
+/// camera whose every ray is tangent to a mirror sphere.
 #[inline]
 pub fn density_vanishes(cos: f32) -> bool {
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -519,45 +495,20 @@ pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32
 /// reason is cost: a light vertex of BDPT or VCM is connected to by every camera vertex of its
 /// pixel (a shadow ray each) and merged with, so ending more of the light subpaths that carry
 /// little buys more iterations; in light tracing a light vertex costs one splat, in SPPM a grid
-/// entry. Measured by setting the start on each side (vcm, 256x256, 20 s on 2 cores, in two
-/// sweeps, seeds 11 and 12, then 13 and 14, each setting with "3, 3" in the same sweep; relMSE
-/// against the references of `docs/methods.sh references` minus their noise):
-///
-/// | start: camera, light subpaths | 3, 3 (before) | 3, 2 | 3, 1 | 3, 0 | 1, 1 | 1, 3 |
-/// | --- | --- | --- | --- | --- | --- | --- |
-/// | tncg15_room, seeds 11, 12 | 2.46, 2.50 | | 2.16, 2.30 | | 2.24, 2.26 | 2.40, 2.41 |
-/// | tncg15_room, seeds 13, 14 | 2.38, 2.48 | 2.32, 2.28 | 2.41, 2.33 | 2.35, 2.37 | | |
-/// | glass_room, seeds 11, 12 | 2.22, 2.20 | | 2.17, 2.17 | | 2.22, 2.09 | 2.15, 2.14 |
-/// | glass_room, seeds 13, 14 | 2.17, 2.30 | 2.16, 2.15 | 2.04, 2.11 | 2.04, 2.19 | | |
-///
-/// (relMSE in units of 1e-3; the references' noise, 1.3e-4 and 1.0e-4, subtracted.) Light
-/// subpaths from bounce 1: 7 of the 8 same-seed pairs lower, −6 % on tncg15_room and −5 % on
-/// glass_room in the mean, for 5 – 15 % more iterations; from 0 or 2 no better. Starting the
-/// camera subpaths early too (1, 1) gains nothing more and costs a test its power: dividing β by
-/// q from bounce 1 keeps it near 1, fewer merge queries fall under the merge roulette's
-/// threshold, and the merging furnace no longer tells that roulette undivided (z −1.6, against
-/// −31; `tests/photon_merging.rs`). Light tracing from bounce 1 moved its batch-means χ² below
-/// its interval (319.9 against [330.0, 475.5], `tests/standard_error.rs`), probably the heavier
-/// tails of splats divided by q early; its vertex costs one splat, so it keeps bounce 3.
+/// entry. From bounce 1 rather than 3, vcm's relMSE is 6 % lower on tncg15_room and 5 % on
+/// glass_room, for 5 – 15 % more iterations (256x256, 20 s on 2 cores, seeds 11 – 14); from 0 or
+/// 2 it is no better. The camera subpaths keep bounce 3: from bounce 1 they gain nothing more,
+/// and the merging furnace (`tests/photon_merging.rs`) would no longer tell the merge roulette
+/// undivided. Light tracing keeps bounce 3 too: from 1, its batch-means χ² falls below its
+/// interval (`tests/standard_error.rs`). The sweeps: docs/journal/2026-11-25_light_roulette.md.
 pub const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1;
 
 /// τ of VCM's Russian roulette on merge queries ([`merge_survival`]), as a share of the
-/// camera subpath's throughput. Measured by setting it (tncg15_room and glass_room, 256x256,
-/// 30 s on 2 cores, seeds 43 and 44, relMSE against the references of `docs/methods.sh
-/// references`, the values of τ alternated in one run):
-///
-/// | τ | 0 (no roulette) | 0.05 | 0.1 | 0.2 |
-/// | --- | --- | --- | --- | --- |
-/// | tncg15_room iterations | 152, 150 | 172, 172 | 173, 170 | 178, 176 |
-/// | tncg15_room relMSE | 1.83e-3, 1.84e-3 | 1.65e-3, 1.64e-3 | 1.65e-3, 1.67e-3 | 1.63e-3, 1.64e-3 |
-/// | glass_room iterations | 184, 185 | 194, 206 | 197, 209 | 201, 207 |
-/// | glass_room relMSE | 1.59e-3, 1.59e-3 | 1.52e-3, 1.45e-3 | 1.51e-3, 1.44e-3 | 1.51e-3, 1.48e-3 |
-///
-/// Flat from 0.05 to 0.2; at 0.5 and 1 (another run) relMSE rose again, to 1.65e-3 and
-/// 1.88e-3 on tncg15_room, 1.54e-3 and 1.82e-3 on glass_room: the roulette's variance falls on
-/// dark pixels, which relMSE weighs most. At τ = 0.1, 57 % of the queries are skipped on both
-/// scenes, and the variance they add is 0.14 % and 0.11 % of the image's (summed over pixels,
-/// counted in a 16-iteration render).
+/// camera subpath's throughput: 0.1. relMSE is flat from τ = 0.05 to 0.2 and rises again at 0.5
+/// and 1, since the roulette's variance falls on dark pixels, which relMSE weighs most. At 0.1,
+/// 57 % of the queries are skipped on tncg15_room and glass_room, for 1.14x and 1.10x the
+/// iterations and 0.90x and 0.93x the relMSE of no roulette (256x256, 30 s on 2 cores, seeds 43
+/// and 44), and the variance they add is 0.14 % and 0.11 % of the image's.
 pub const MERGE_RR_THRESHOLD: f32 = 0.1;
 
 /// Russian roulette on the merge query of a camera vertex (VCM): the probability of running
@@ -571,8 +522,8 @@ pub const MERGE_RR_THRESHOLD: f32 = 0.1;
 /// τ = [`MERGE_RR_THRESHOLD`] runs with probability b / τ and is divided by it, which keeps
 /// the estimate unbiased (E[Q 1{u < q} / q] = Q) and adds at most (1/q − 1) Q² of variance.
 /// SPPM, whose merges are its only strategy, runs every query (τ = 0). A merge query is not a
-/// ray: it costs about 400 ns of memory latency on the CPU (docs/performance.md, "Photon
-/// merging's queries"), a third of a vcm iteration, and most of it is spent where the other
+/// ray: it costs about 400 ns of memory latency on the CPU, a third of a vcm iteration
+/// (docs/journal/2026-11-25_merge_queries.md), and most of it is spent where the other
 /// strategies carry the light.
 #[inline]
 pub fn merge_survival(
