@@ -4,6 +4,7 @@
 //! own located error and exit 2; the BVH over a 10^5-triangle mesh finds exactly what testing
 //! every triangle finds; and the GPU renders the bunny room as the CPU does.
 
+use crate::common::temp_dir;
 use crate::common::*;
 use hexray::accel::bvh;
 use hexray::layout::{FlatScene, Triangle};
@@ -14,10 +15,8 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use crate::common::temp_dir;
 
 const ROOM: &str = "scenes/tncg15_room.json";
-
 
 fn room() -> Value {
     serde_json::from_str(&std::fs::read_to_string(repo(ROOM)).unwrap()).unwrap()
