@@ -7,7 +7,7 @@
 //!
 //! A GPU, and lavapipe with its 8 lanes of 32 bits in 256-bit registers, runs a group of
 //! invocations in lockstep: a loop turns as long as one lane needs it, and the other lanes wait
-//! masked. `render` in `shaders/path.wgsl` is one invocation per pixel of an 8x8 workgroup, so a
+//! masked. `render_pass` in `shaders/path.wgsl` is one invocation per pixel of an 8x8 workgroup, so a
 //! group is LANES (default 8) neighbouring pixels of one row and one sample. This traces the
 //! same paths on the CPU (same streams: the GPU's paths are these, ray for ray), counts per ray
 //! the BVH nodes visited and the primitives tested (the units of `shaders/bvh.wgsl`'s loops,

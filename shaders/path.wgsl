@@ -3,7 +3,7 @@
 // multiple importance sampling (power heuristic); Russian roulette, no maximum depth.
 //
 // A path is `start_path`, then `path_bounce` until it returns false, then `finish_path`: the
-// CPU's `trace_path` for one sample. Here `render` runs that sequence for all of a pass's
+// CPU's `trace_path` for one sample. Here `render_pass` runs that sequence for all of a pass's
 // samples of a pixel in one loop of bounces (path regeneration), in sample order. The CPU's
 // renders split a bounce further (`shade_hit`, `add_next_event`, `end_bounce`) so that a round's
 // shadow rays are traced together; step 4's light is added there before the next bounce's, and
@@ -156,7 +156,7 @@ fn finish_path(path: PathState) -> vec3<f32> {
 // One invocation per pixel of the dispatch's tile: the frame's samples of that pixel, added to
 // the pass's sums.
 @compute @workgroup_size(8, 8, 1)
-fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.tile_size.x || gid.y >= frame.tile_size.y || frame.sample_count == 0u {
         return;
     }

@@ -194,7 +194,7 @@ impl CameraPass<'_> {
     /// as one subpath ([`CameraTerms::end_subpath`]); their sum is the radiance. `rays` counts
     /// the rays traced, the pending visibility rays included.
     #[allow(clippy::too_many_arguments)]
-    pub fn trace(
+    pub fn trace_camera_path(
         &self,
         x: u32,
         y: u32,

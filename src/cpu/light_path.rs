@@ -169,7 +169,7 @@ impl LightPass<'_> {
     /// `pending`, for [`add_splats`] to splat where the eye is visible (not for SPPM), and, but
     /// for light tracing, appends its diffuse vertices to `vertices`, in order. Returns the
     /// number of rays traced, the pending splats' included.
-    pub fn trace(
+    pub fn trace_light_path(
         &self,
         path: u32,
         sampler: &Sampler,

@@ -211,7 +211,12 @@ pub fn render_iterations(
                 let mut rays = 0;
                 let mut pending = Vec::new();
                 for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
-                    rays += pass.trace(i, &Sampler::new(seed, i, s), &mut pending, &mut vertices);
+                    rays += pass.trace_light_path(
+                        i,
+                        &Sampler::new(seed, i, s),
+                        &mut pending,
+                        &mut vertices,
+                    );
                     ends.push(vertices.len() as u32);
                 }
                 // The chunk's splats, their visibility rays in packets.
@@ -288,8 +293,9 @@ pub fn render_iterations(
                             let n_c = buffers.camera_subpaths[index];
                             for k in 0..n_c {
                                 let sampler = Sampler::new(seed, index as u32 + k * n_paths, s);
-                                camera_pass
-                                    .trace(x, y, n_c, &sampler, light_path, terms, &mut rays);
+                                camera_pass.trace_camera_path(
+                                    x, y, n_c, &sampler, light_path, terms, &mut rays,
+                                );
                             }
                             n_c
                         } else {

@@ -44,7 +44,7 @@ pub const RR_MAX_SURVIVAL: f32 = 0.95;
 ///
 /// The path is started ([`start_path`]), advanced one bounce at a time ([`path_bounce`]) until
 /// it ends, and finished ([`finish_path`]). `path_wavefront::trace_pixels` runs the same steps for many
-/// pixels at once, their rays in packets; the shader's `render` hands a lane whose path ended
+/// pixels at once, their rays in packets; the shader's `render_pass` hands a lane whose path ended
 /// to the pixel's next sample at once (path regeneration), so that lanes running in lockstep do
 /// not wait for their group's longest path.
 #[allow(clippy::too_many_arguments)]

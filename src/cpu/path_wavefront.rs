@@ -29,7 +29,7 @@ use std::f32::consts::FRAC_1_PI;
 /// ([`shade_hit`]), traces the diffuse hits' shadow rays as one packet ([`occluded_lanes`]) and
 /// adds what they let through. A lane whose path ended adds its sample to its pixel and starts
 /// the pixel's next sample, or the next pixel's first, in place (path regeneration, as the
-/// shader's `render`), so that nothing is gathered or moved between rounds. Each sample is the
+/// shader's `render_pass`), so that nothing is gathered or moved between rounds. Each sample is the
 /// same path as `trace_path`'s, with the same arithmetic in the same order, so the image is the
 /// same bit for bit (a test below).
 #[allow(clippy::too_many_arguments)]

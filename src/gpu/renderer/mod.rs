@@ -119,7 +119,7 @@ impl GpuRenderer {
             (None, Some(b))
         } else {
             (
-                Some(compute_pipeline(device, &module, &[&layout], "render")),
+                Some(compute_pipeline(device, &module, &[&layout], "render_pass")),
                 None,
             )
         };
@@ -331,7 +331,7 @@ impl GpuRenderer {
     /// Queues samples `first..first + count` of rows `band_start..band_end` (one film band) in
     /// dispatches of about `paths_per_dispatch` paths, each of all `count` samples over as many
     /// rows as that allows (a multiple of the workgroup height, at least one workgroup): the
-    /// lanes then have `count` samples each to regenerate their paths with (`render` in
+    /// lanes then have `count` samples each to regenerate their paths with (`render_pass` in
     /// `shaders/path.wgsl`). On lavapipe, 256x256, 64 spp, this gave 1.4 - 1.7x the camera
     /// paths/s of dispatches of one sample over more rows (docs/journal/2026-11-25_regeneration.md). The smallest dispatch,
     /// one workgroup of rows with 64 samples, can exceed the time target on a slow adapter
