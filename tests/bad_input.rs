@@ -3,10 +3,10 @@
 //! exit status is 2; no output file is created, and an existing one is not touched.
 
 use crate::common::repo;
+use crate::common::temp_dir;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::{Command, Output};
-use crate::common::temp_dir;
 
 struct Case {
     name: &'static str,
@@ -228,7 +228,6 @@ fn hexray(args: &[&str]) -> Output {
         .output()
         .expect("running hexray")
 }
-
 
 /// Runs hexray on `scene_text` with outputs in an empty folder that holds one old PNG; checks the
 /// exit status, that the old PNG is untouched and that nothing else appeared. Returns stderr.

@@ -3,17 +3,16 @@
 //! both end the render with the samples taken so far written out.
 
 use crate::common::repo;
+use crate::common::temp_dir;
 use hexray::film::output::read_exr;
 use std::path::PathBuf;
 use std::process::Command;
-use crate::common::temp_dir;
 
 fn hexray() -> Command {
     let mut c = Command::new(crate::common::hexray_bin());
     c.current_dir(env!("CARGO_MANIFEST_DIR"));
     c
 }
-
 
 #[test]
 fn render_writes_exr_png_and_variance_with_metadata() {

@@ -2,13 +2,12 @@
 //! .npy and EXR alike, and refuses images of different sizes.
 
 use crate::common::repo;
+use crate::common::temp_dir;
 use hexray::analysis::compare::{compare, read_image, RELMSE_EPSILON};
 use hexray::film::output::{write_exr, Metadata, RgbImage};
 use npyz::WriterBuilder;
 use std::path::Path;
 use std::process::Command;
-use crate::common::temp_dir;
-
 
 /// A deterministic test image with values spread over [0, 2).
 fn image(w: usize, h: usize) -> RgbImage {

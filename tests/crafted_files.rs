@@ -2,15 +2,14 @@
 //! (issue 16): a header that claims more pixels than its file holds is refused before any
 //! allocation, and merge refuses, by file and pixel, what would poison its sums silently.
 
+use crate::common::temp_dir;
 use hexray::film::output::{read_exr, write_exr, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Output;
-use crate::common::temp_dir;
 
 fn hexray(args: &[&str]) -> Output {
     crate::common::hexray_command().args(args).output().unwrap()
 }
-
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -4,11 +4,11 @@
 //! script gives what the CLI gives by hand.
 
 use crate::common::repo;
+use crate::common::temp_dir;
 use hexray::analysis::stats::{student_t_two_sided_p, welch_blocks, MeanImage};
 use hexray::film::output::{read_exr, Metadata, RgbImage};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use crate::common::temp_dir;
 
 const SCENE: &str = "scenes/cornell_box.json";
 const SIZE: &str = "48";
@@ -18,7 +18,6 @@ fn hexray() -> Command {
     c.current_dir(repo("."));
     c
 }
-
 
 fn render(scene: &str, seed: u32, spp: u32, out: &Path) {
     render_with(scene, seed, spp, "path", out);

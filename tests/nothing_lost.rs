@@ -4,16 +4,15 @@
 //! survive a kill without warning.
 
 use crate::common::repo;
+use crate::common::temp_dir;
 use hexray::film::output::read_exr;
 use std::path::Path;
 use std::process::{Command, Output};
 use std::time::Duration;
-use crate::common::temp_dir;
 
 fn hexray() -> Command {
     crate::common::hexray_command()
 }
-
 
 /// A small CPU render of `scene` with `args`, into `out`.
 fn render(scene: &Path, out: &Path, args: &[&str]) -> Output {
