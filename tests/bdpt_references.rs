@@ -44,34 +44,21 @@ fn assert_agrees_with_mitsuba(film: &hexray::film::Film) {
     );
 }
 
-#[test]
-fn cpu_bdpt_cornell_box_agrees_with_mitsuba() {
-    let film = render_cpu_method(
-        "scenes/cornell_box.json",
-        256,
-        256,
-        64,
-        13,
-        Method::Bdpt,
-        Faults::NONE,
-    );
-    assert_agrees_with_mitsuba(&film);
-}
-
-#[test]
-fn gpu_bdpt_cornell_box_agrees_with_mitsuba() {
-    let Some(gpu) = gpu() else { return };
-    let film = render_gpu_method(
-        gpu,
-        "scenes/cornell_box.json",
-        128,
-        128,
-        64,
-        14,
-        Method::Bdpt,
-        Faults::NONE,
-    );
-    assert_agrees_with_mitsuba(&film);
+on_each_backend! {
+    /// 64 iterations: on the CPU at 256x256 (seed 13), on the GPU at 128x128 (seed 14).
+    fn bdpt_cornell_box_agrees_with_mitsuba(backend) {
+        let (size, seed) = match backend {
+            Backend::Cpu => (256, 13),
+            Backend::Gpu => (128, 14),
+        };
+        let film = Render::file("scenes/cornell_box.json")
+            .size(size, size)
+            .spp(64)
+            .seed(seed)
+            .method(Method::Bdpt)
+            .on(backend);
+        assert_agrees_with_mitsuba(&film);
+    }
 }
 
 /// BDPT at 32x32, `iterations` iterations, against a path-traced reference, blocks and mean.
@@ -82,7 +69,13 @@ fn against_reference(
     seed: u32,
     faults: Faults,
 ) -> bool {
-    let film = render_cpu_method(rel, 32, 32, iterations, seed, Method::Bdpt, faults);
+    let film = Render::file(rel)
+        .size(32, 32)
+        .spp(iterations)
+        .seed(seed)
+        .method(Method::Bdpt)
+        .faults(faults)
+        .cpu();
     assert_eq!(film.dropped(), 0, "non-finite samples");
     compare(
         &format!("BDPT {rel}"),
@@ -143,7 +136,13 @@ fn bdpt_reference_test_rejects_light_by_a_planar_mirror_counted_twice() {
 }
 
 fn mean_against_reference(rel: &str, reference: &str, seed: u32, faults: Faults) -> bool {
-    let film = render_cpu_method(rel, 32, 32, 2048, seed, Method::Bdpt, faults);
+    let film = Render::file(rel)
+        .size(32, 32)
+        .spp(2048)
+        .seed(seed)
+        .method(Method::Bdpt)
+        .faults(faults)
+        .cpu();
     assert_eq!(film.dropped(), 0, "non-finite samples");
     means_agree(film_mean_z(&format!("BDPT {rel}"), &film, reference))
 }

@@ -28,15 +28,24 @@ fn check(what: &str, film: &Film) {
     assert_eq!(film.dropped(), 0, "{what}: non-finite samples");
 }
 
-fn on_cpu(rel: &str, method: Method) {
-    let film = render_cpu_method(rel, SIZE, SIZE, ITERATIONS, 22, method, Faults::NONE);
-    check(&format!("{method} {rel}"), &film);
+/// `ITERATIONS` iterations of `method` on `backend`: seed 22 on the CPU, 23 on the GPU.
+fn render(backend: Backend, rel: &str, method: Method, faults: Faults) -> Film {
+    let seed = match backend {
+        Backend::Cpu => 22,
+        Backend::Gpu => 23,
+    };
+    Render::file(rel)
+        .size(SIZE, SIZE)
+        .spp(ITERATIONS)
+        .seed(seed)
+        .method(method)
+        .faults(faults)
+        .on(backend)
 }
 
-fn on_gpu(rel: &str, method: Method) {
-    let Some(g) = gpu() else { return };
-    let film = render_gpu_method(g, rel, SIZE, SIZE, ITERATIONS, 23, method, Faults::NONE);
-    check(&format!("GPU {method} {rel}"), &film);
+fn furnace(backend: Backend, rel: &str, method: Method) {
+    let film = render(backend, rel, method, Faults::NONE);
+    check(&format!("{backend} {method} {rel}"), &film);
 }
 
 const HALF: &str = "scenes/furnace/diffuse_0_5.json";
@@ -45,79 +54,59 @@ const WHITE: &str = "scenes/furnace/diffuse_0_95.json";
 const MIRROR: &str = "scenes/furnace/mirror_sphere.json";
 const GLASS: &str = "scenes/furnace/glass_sphere.json";
 
-#[test]
-fn bdpt_furnace_albedo_0_5_converges_to_1() {
-    on_cpu(HALF, Method::Bdpt);
+on_each_backend! {
+    fn bdpt_furnace_albedo_0_5_converges_to_1(backend) {
+        furnace(backend, HALF, Method::Bdpt);
+    }
+
+    fn bdpt_furnace_albedo_0_95_converges_to_1(backend) {
+        furnace(backend, WHITE, Method::Bdpt);
+    }
+
+    fn bdpt_mirror_sphere_in_a_furnace_converges_to_1(backend) {
+        furnace(backend, MIRROR, Method::Bdpt);
+    }
+
+    fn bdpt_glass_sphere_in_a_furnace_converges_to_1(backend) {
+        furnace(backend, GLASS, Method::Bdpt);
+    }
+
+    /// The test has power: BDPT with paths capped at 8 bounces loses much of the white
+    /// furnace's light (ρ^9 of it for each pixel's paths, 37 % at ρ = 0.95).
+    fn bdpt_furnace_rejects_a_depth_cap(backend) {
+        let film = render(backend, WHITE, Method::Bdpt, DEPTH_CAP);
+        assert_too_dark(&format!("{backend} BDPT with a depth cap"), &film);
+    }
 }
 
 #[test]
 fn bdpt_furnace_albedo_0_8_converges_to_1() {
-    on_cpu(BRIGHT, Method::Bdpt);
-}
-
-#[test]
-fn bdpt_furnace_albedo_0_95_converges_to_1() {
-    on_cpu(WHITE, Method::Bdpt);
-}
-
-#[test]
-fn bdpt_mirror_sphere_in_a_furnace_converges_to_1() {
-    on_cpu(MIRROR, Method::Bdpt);
-}
-
-#[test]
-fn bdpt_glass_sphere_in_a_furnace_converges_to_1() {
-    on_cpu(GLASS, Method::Bdpt);
+    furnace(Backend::Cpu, BRIGHT, Method::Bdpt);
 }
 
 #[test]
 fn light_tracing_furnace_albedo_0_5_converges_to_1() {
-    on_cpu(HALF, Method::Light);
+    furnace(Backend::Cpu, HALF, Method::Light);
 }
 
 #[test]
 fn light_tracing_furnace_albedo_0_95_converges_to_1() {
-    on_cpu(WHITE, Method::Light);
-}
-
-#[test]
-fn gpu_bdpt_furnace_albedo_0_5_converges_to_1() {
-    on_gpu(HALF, Method::Bdpt);
-}
-
-#[test]
-fn gpu_bdpt_furnace_albedo_0_95_converges_to_1() {
-    on_gpu(WHITE, Method::Bdpt);
-}
-
-#[test]
-fn gpu_bdpt_mirror_sphere_in_a_furnace_converges_to_1() {
-    on_gpu(MIRROR, Method::Bdpt);
-}
-
-#[test]
-fn gpu_bdpt_glass_sphere_in_a_furnace_converges_to_1() {
-    on_gpu(GLASS, Method::Bdpt);
+    furnace(Backend::Cpu, WHITE, Method::Light);
 }
 
 #[test]
 fn gpu_light_tracing_furnace_albedo_0_8_converges_to_1() {
-    on_gpu(BRIGHT, Method::Light);
+    if gpu().is_none() {
+        return;
+    }
+    furnace(Backend::Gpu, BRIGHT, Method::Light);
 }
 
 /// Light tracing sees nothing through the mirror sphere: its furnace image is too dark, as
 /// `--help` says, which is why it is tested only where it is unbiased.
 #[test]
 fn light_tracing_cannot_see_the_mirror_sphere() {
-    let film = render_cpu_method(
-        MIRROR,
-        SIZE,
-        SIZE,
-        ITERATIONS,
-        22,
-        Method::Light,
-        Faults::NONE,
-    );
+    let film = render(Backend::Cpu, MIRROR, Method::Light, Faults::NONE);
     let (_, _, z) = image_mean_z(&film, [1.0; 3]);
     assert!(z.iter().all(|z| *z < -4.0), "z = {z:?}");
 }
@@ -136,30 +125,6 @@ const DEPTH_CAP: Faults = Faults {
     ..Faults::NONE
 };
 
-/// The test has power: BDPT with paths capped at 8 bounces loses much of the white furnace's
-/// light (ρ^9 of it for each pixel's paths, 37 % at ρ = 0.95).
-#[test]
-fn bdpt_furnace_rejects_a_depth_cap() {
-    let film = render_cpu_method(WHITE, SIZE, SIZE, ITERATIONS, 22, Method::Bdpt, DEPTH_CAP);
-    assert_too_dark("BDPT with a depth cap", &film);
-}
-
-#[test]
-fn gpu_bdpt_furnace_rejects_a_depth_cap() {
-    let Some(g) = gpu() else { return };
-    let film = render_gpu_method(
-        g,
-        WHITE,
-        SIZE,
-        SIZE,
-        ITERATIONS,
-        23,
-        Method::Bdpt,
-        DEPTH_CAP,
-    );
-    assert_too_dark("GPU BDPT with a depth cap", &film);
-}
-
 /// ... and a mirror that reflects 97 % of what it should, on every subpath that meets it.
 #[test]
 fn bdpt_furnace_rejects_a_dim_mirror() {
@@ -167,6 +132,12 @@ fn bdpt_furnace_rejects_a_dim_mirror() {
         specular_scale: 0.97,
         ..Faults::NONE
     };
-    let film = render_cpu_method(MIRROR, SIZE, SIZE, 256, 22, Method::Bdpt, dim);
+    let film = Render::file(MIRROR)
+        .size(SIZE, SIZE)
+        .spp(256)
+        .seed(22)
+        .method(Method::Bdpt)
+        .faults(dim)
+        .cpu();
     assert_too_dark("BDPT with a dim mirror", &film);
 }

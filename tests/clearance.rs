@@ -194,6 +194,7 @@ fn strip_mean(film: &hexray::film::Film, strip: &[usize]) -> f64 {
 /// scatter of 64 independent iterations' strip means (its pixels share photons, so their
 /// variances do not add up), the path tracer's from its independent pixels' variances.
 fn edge_z(faults: hexray::transport::faults::Faults) -> f64 {
+    use crate::common::{Backend, Render};
     use hexray::transport::merging::MergeRadius;
     use hexray::transport::method::Method;
     let strip = strip_pixels();
@@ -201,20 +202,19 @@ fn edge_z(faults: hexray::transport::faults::Faults) -> f64 {
         initial: EDGE_RADIUS,
         alpha: 1.0,
     };
-    let iterations =
-        crate::common::render_cpu_iterations(EDGE, 32, 32, 64, 5, Method::Vcm, radius, faults);
+    let iterations = Render::file(EDGE)
+        .size(32, 32)
+        .spp(64)
+        .seed(5)
+        .method(Method::Vcm)
+        .radius(radius)
+        .faults(faults)
+        .iterations_on(Backend::Cpu);
     let means: Vec<f64> = iterations.iter().map(|f| strip_mean(f, &strip)).collect();
     let k = means.len() as f64;
     let vcm = means.iter().sum::<f64>() / k;
     let var_vcm = means.iter().map(|m| (m - vcm).powi(2)).sum::<f64>() / (k - 1.0) / k;
-    let path = crate::common::render_cpu(
-        EDGE,
-        32,
-        32,
-        1024,
-        6,
-        hexray::transport::faults::Faults::NONE,
-    );
+    let path = Render::file(EDGE).size(32, 32).spp(1024).seed(6).cpu();
     let path_mean = strip_mean(&path, &strip);
     let var_path = strip
         .iter()

@@ -11,7 +11,6 @@
 //! Statistic: |image mean − L| ≤ 4 s.e. per channel.
 
 use crate::common::*;
-use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
 use std::f64::consts::PI;
 
@@ -43,21 +42,25 @@ const SCENE: &str = "scenes/analytic/direct_light.json";
 
 #[test]
 fn radiance_under_a_square_emitter_matches_the_form_factor() {
-    let film = render_cpu(SCENE, 8, 8, 1024, 3, Faults::NONE);
+    let film = Render::file(SCENE).size(8, 8).spp(1024).seed(3).cpu();
     check(&film, "direct light");
 }
 
-/// BDPT takes the same light by next-event estimation, by light subpaths splatted to the
-/// camera and by connections, weighted by MIS; the sum is the form factor again.
-#[test]
-fn bdpt_radiance_under_a_square_emitter_matches_the_form_factor() {
-    let film = render_cpu_method(SCENE, 8, 8, 1024, 4, Method::Bdpt, Faults::NONE);
-    check(&film, "direct light, BDPT");
-}
-
-#[test]
-fn gpu_bdpt_radiance_under_a_square_emitter_matches_the_form_factor() {
-    let Some(gpu) = gpu() else { return };
-    let film = render_gpu_method(gpu, SCENE, 8, 8, 1024, 5, Method::Bdpt, Faults::NONE);
-    check(&film, "GPU direct light, BDPT");
+on_each_backend! {
+    /// BDPT takes the same light by next-event estimation, by light subpaths splatted to the
+    /// camera and by connections, weighted by MIS; the sum is the form factor again. Seed 4 on
+    /// the CPU, 5 on the GPU.
+    fn bdpt_radiance_under_a_square_emitter_matches_the_form_factor(backend) {
+        let seed = match backend {
+            Backend::Cpu => 4,
+            Backend::Gpu => 5,
+        };
+        let film = Render::file(SCENE)
+            .size(8, 8)
+            .spp(1024)
+            .seed(seed)
+            .method(Method::Bdpt)
+            .on(backend);
+        check(&film, &format!("{backend} direct light, BDPT"));
+    }
 }

@@ -2,10 +2,9 @@
 //! when the image is larger than one storage binding (lavapipe: 128 MiB, 2048 x 2048), and the
 //! methods that splat refuse such an image plainly before any work.
 
-use crate::common::{empty_temp_dir, gpu, gpu_renderer, hexray_command, load};
+use crate::common::{empty_temp_dir, gpu, hexray_command, Render};
 use hexray::film::output::read_exr;
 use hexray::film::Film;
-use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
 
 /// The band tests' image: 24x19 (the height a multiple neither of 5 nor of the 8-row
@@ -16,9 +15,12 @@ const SPP: u32 = 3;
 
 /// A GPU render of the band tests' image with `method`, in film bands of `rows` rows (None: as
 /// many as the buffers hold, here the whole image).
-fn render_in_bands(gpu: &hexray::gpu::Gpu, method: Method, rows: Option<u32>) -> Film {
-    let (scene, flat) = load("scenes/tncg15_room.json");
-    let mut r = gpu_renderer(gpu, &scene, &flat, W, H, 7, method, Faults::default());
+fn render_in_bands(method: Method, rows: Option<u32>) -> Film {
+    let mut r = Render::file("scenes/tncg15_room.json")
+        .size(W, H)
+        .seed(7)
+        .method(method)
+        .gpu_renderer();
     if let Some(rows) = rows {
         r.set_film_rows(rows);
     }
@@ -34,10 +36,12 @@ fn render_in_bands(gpu: &hexray::gpu::Gpu, method: Method, rows: Option<u32>) ->
 /// a band folded at the wrong row, a sample traced twice or one left out, changes them.
 #[test]
 fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
-    let Some(gpu) = gpu() else { return };
+    if gpu().is_none() {
+        return;
+    }
     let (w, spp) = (W, SPP);
-    let whole = render_in_bands(gpu, Method::Path, None);
-    let banded = render_in_bands(gpu, Method::Path, Some(5));
+    let whole = render_in_bands(Method::Path, None);
+    let banded = render_in_bands(Method::Path, Some(5));
     for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
         assert_eq!(a.n, spp as u64, "pixel {i}");
         assert_eq!(
@@ -60,12 +64,14 @@ fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
 /// at the wrong row, fails.
 #[test]
 fn splatting_methods_in_film_bands_equal_one_band() {
-    let Some(gpu) = gpu() else { return };
+    if gpu().is_none() {
+        return;
+    }
     let (w, spp) = (W, SPP);
     let rel = |x: f64, y: f64| (x - y).abs() / x.abs().max(1e-30);
     for method in [Method::Light, Method::Bdpt, Method::Sppm, Method::Vcm] {
-        let whole = render_in_bands(gpu, method, None);
-        let banded = render_in_bands(gpu, method, Some(5));
+        let whole = render_in_bands(method, None);
+        let banded = render_in_bands(method, Some(5));
         for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
             let at = format!("{method}: pixel {i} (row {}): {a:?} {b:?}", i as u32 / w);
             assert_eq!((a.n, b.n), (spp as u64, spp as u64), "{at}");

@@ -22,9 +22,10 @@ struct Parity {
 }
 
 fn parity(rel: &str, spp: u32, gpu_faults: Faults) -> Option<Parity> {
-    let gpu = gpu()?;
-    let a = MeanImage::from_film(&render_cpu(rel, SIZE, SIZE, spp, 1, Faults::NONE));
-    let b = MeanImage::from_film(&render_gpu(gpu, rel, SIZE, SIZE, spp, 2, gpu_faults));
+    gpu()?;
+    let render = Render::file(rel).size(SIZE, SIZE).spp(spp);
+    let a = MeanImage::from_film(&render.seed(1).cpu());
+    let b = MeanImage::from_film(&render.seed(2).faults(gpu_faults).gpu());
     let report = welch_blocks(&a.blocks(8), &b.blocks(8), 0.01);
     let (ma, sa) = a.grand_mean();
     let (mb, sb) = b.grand_mean();
@@ -104,9 +105,10 @@ fn gpu_matches_cpu_on_cornell_box() {
 /// `shaders/path.wgsl`), over dispatches of 16 of the 64 rows.
 fn same_streams(rel: &str, gpu_faults: Faults) -> Option<f64> {
     const SAME_SPP: u32 = 64;
-    let gpu = gpu()?;
-    let a = render_cpu(rel, SIZE, SIZE, SAME_SPP, 5, Faults::NONE);
-    let b = render_gpu(gpu, rel, SIZE, SIZE, SAME_SPP, 5, gpu_faults);
+    gpu()?;
+    let render = Render::file(rel).size(SIZE, SIZE).spp(SAME_SPP).seed(5);
+    let a = render.cpu();
+    let b = render.faults(gpu_faults).gpu();
     let e = relmse_between(&b, &a);
     eprintln!("path {rel}, same seed, GPU against CPU: relMSE {e:.3e}");
     Some(e)

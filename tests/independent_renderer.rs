@@ -18,7 +18,6 @@
 use crate::common::*;
 use hexray::analysis::stats::{z_scores, MeanImage};
 use hexray::film::output::read_npy_rgb;
-use hexray::transport::faults::Faults;
 
 fn mitsuba() -> MeanImage {
     let mean = read_npy_rgb(&repo("tests/data/references/cornell_box_256.npy")).unwrap();
@@ -67,43 +66,33 @@ pub fn compare_with_mitsuba(ours: &MeanImage) -> (f64, [f64; 3]) {
     (z.beyond_5, ratio_z)
 }
 
-#[test]
-fn gpu_cornell_box_agrees_with_mitsuba() {
-    let Some(gpu) = gpu() else { return };
-    let film = render_gpu(
-        gpu,
-        "scenes/cornell_box.json",
-        128,
-        128,
-        64,
-        12,
-        Faults::NONE,
-    );
-    let (beyond, ratio_z) = compare_with_mitsuba(&MeanImage::from_film(&film));
-    assert!(
-        beyond < 0.001,
-        "{:.3} % of block-channels beyond 5 s.e.",
-        100.0 * beyond
-    );
-    assert!(
-        ratio_z.iter().all(|z| z.abs() <= 4.0),
-        "image-mean ratio z {ratio_z:?}"
-    );
+/// 64 samples per pixel on the CPU at 256x256 (seed 11), on the GPU at 128x128 (seed 12).
+fn cornell_box(backend: Backend) -> hexray::film::Film {
+    let (size, seed) = match backend {
+        Backend::Cpu => (256, 11),
+        Backend::Gpu => (128, 12),
+    };
+    Render::file("scenes/cornell_box.json")
+        .size(size, size)
+        .spp(64)
+        .seed(seed)
+        .on(backend)
 }
 
-#[test]
-fn cpu_cornell_box_agrees_with_mitsuba() {
-    let film = render_cpu("scenes/cornell_box.json", 256, 256, 64, 11, Faults::NONE);
-    let (beyond, ratio_z) = compare_with_mitsuba(&MeanImage::from_film(&film));
-    assert!(
-        beyond < 0.001,
-        "{:.3} % of block-channels beyond 5 s.e.",
-        100.0 * beyond
-    );
-    assert!(
-        ratio_z.iter().all(|z| z.abs() <= 4.0),
-        "image-mean ratio z {ratio_z:?}"
-    );
+on_each_backend! {
+    fn cornell_box_agrees_with_mitsuba(backend) {
+        let film = cornell_box(backend);
+        let (beyond, ratio_z) = compare_with_mitsuba(&MeanImage::from_film(&film));
+        assert!(
+            beyond < 0.001,
+            "{backend}: {:.3} % of block-channels beyond 5 s.e.",
+            100.0 * beyond
+        );
+        assert!(
+            ratio_z.iter().all(|z| z.abs() <= 4.0),
+            "{backend}: image-mean ratio z {ratio_z:?}"
+        );
+    }
 }
 
 /// Power: a cornell box whose walls reflect 2 % less (albedo x 0.98 through the dim-mirror
@@ -111,7 +100,7 @@ fn cpu_cornell_box_agrees_with_mitsuba() {
 /// scene's light: the ratio test must reject a 2 % darker image).
 #[test]
 fn mitsuba_comparison_rejects_a_2_percent_darker_image() {
-    let film = render_cpu("scenes/cornell_box.json", 256, 256, 64, 11, Faults::NONE);
+    let film = cornell_box(Backend::Cpu);
     let mut ours = MeanImage::from_film(&film);
     for m in &mut ours.mean {
         *m = m.map(|x| x * 0.98);

@@ -6,7 +6,6 @@
 use crate::common::*;
 use hexray::analysis::stats::{welch_blocks, MeanImage};
 use hexray::film::Film;
-use hexray::transport::faults::Faults;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 use std::f64::consts::PI;
 
@@ -25,15 +24,12 @@ fn direct_light_truth() -> [f64; 3] {
 /// weight overcounts direct light by 28 % and gives z = 117 here.
 #[test]
 fn four_shadow_rays_match_the_form_factor() {
-    let film = render_cpu_light_samples(
-        "scenes/analytic/direct_light.json",
-        8,
-        8,
-        512,
-        3,
-        4,
-        Faults::NONE,
-    );
+    let film = Render::file("scenes/analytic/direct_light.json")
+        .size(8, 8)
+        .spp(512)
+        .seed(3)
+        .light_samples(4)
+        .cpu();
     assert_mean_within_4_se(&film, direct_light_truth(), "direct light, 4 shadow rays");
 }
 
@@ -58,8 +54,9 @@ fn pooled_variance(film: &Film) -> ([f64; 3], f64) {
 #[test]
 fn four_shadow_rays_lower_the_variance_of_direct_light() {
     let scene = "scenes/analytic/direct_light.json";
-    let one = render_cpu_light_samples(scene, 8, 8, 512, 5, 1, Faults::NONE);
-    let four = render_cpu_light_samples(scene, 8, 8, 512, 6, 4, Faults::NONE);
+    let render = Render::file(scene).size(8, 8).spp(512);
+    let one = render.seed(5).light_samples(1).cpu();
+    let four = render.seed(6).light_samples(4).cpu();
     let (v1, d1) = pooled_variance(&one);
     let (v4, d4) = pooled_variance(&four);
     let f = FisherSnedecor::new(d1, d4).unwrap();
@@ -82,10 +79,15 @@ fn four_shadow_rays_lower_the_variance_of_direct_light() {
 /// finds no block-channel that differs, and the image means agree within 4 s.e.
 #[test]
 fn gpu_matches_cpu_with_three_shadow_rays() {
-    let Some(gpu) = gpu() else { return };
-    let rel = "scenes/tncg15_room.json";
-    let a = render_cpu_light_samples(rel, 64, 64, 64, 1, 3, Faults::NONE);
-    let b = render_gpu_light_samples(gpu, rel, 64, 64, 64, 2, 3, Faults::NONE);
+    if gpu().is_none() {
+        return;
+    }
+    let render = Render::file("scenes/tncg15_room.json")
+        .size(64, 64)
+        .spp(64)
+        .light_samples(3);
+    let a = render.seed(1).cpu();
+    let b = render.seed(2).gpu();
     let (ma, sa) = a.image_mean();
     let (mb, sb) = b.image_mean();
     let report = welch_blocks(

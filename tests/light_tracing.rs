@@ -22,8 +22,9 @@ const SCENE: &str = "scenes/cornell_box.json";
 const SIZE: u32 = 64;
 
 fn light_against_path(faults: Faults) -> crate::common::parity::Parity {
-    let path = render_cpu(SCENE, SIZE, SIZE, 256, 70, Faults::NONE);
-    let light = render_cpu_method(SCENE, SIZE, SIZE, 256, 71, Method::Light, faults);
+    let render = Render::file(SCENE).size(SIZE, SIZE).spp(256);
+    let path = render.seed(70).cpu();
+    let light = render.seed(71).method(Method::Light).faults(faults).cpu();
     let p = parity(&path, &light);
     eprintln!("light tracing against path tracing on cornell_box: {p}");
     p
@@ -59,7 +60,14 @@ fn light_tracing_is_bit_identical_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_cpu_method(SCENE, 32, 32, 4, 72, Method::Light, Faults::NONE))
+            .install(|| {
+                Render::file(SCENE)
+                    .size(32, 32)
+                    .spp(4)
+                    .seed(72)
+                    .method(Method::Light)
+                    .cpu()
+            })
     };
     let (one, two) = (on(1), on(2));
     assert!(
@@ -71,9 +79,15 @@ fn light_tracing_is_bit_identical_for_any_thread_count() {
 
 #[test]
 fn gpu_light_tracing_is_bit_identical_from_run_to_run() {
-    let Some(gpu) = gpu() else { return };
-    let a = render_gpu_method(gpu, SCENE, 32, 32, 4, 73, Method::Light, Faults::NONE);
-    let b = render_gpu_method(gpu, SCENE, 32, 32, 4, 73, Method::Light, Faults::NONE);
+    if gpu().is_none() {
+        return;
+    }
+    let render = Render::file(SCENE)
+        .size(32, 32)
+        .spp(4)
+        .seed(73)
+        .method(Method::Light);
+    let (a, b) = (render.gpu(), render.gpu());
     assert!(
         same_bits(&a, &b),
         "the GPU's splat sums depend on the order of its invocations"

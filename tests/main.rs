@@ -20,7 +20,6 @@ mod direct_light;
 mod furnace;
 mod fuzz_scenes;
 mod gpu_bands;
-mod gpu_furnace;
 mod gpu_lost;
 mod gpu_parity;
 mod gpu_random;

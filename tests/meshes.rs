@@ -10,7 +10,6 @@ use hexray::accel::bvh;
 use hexray::layout::{FlatScene, Triangle};
 use hexray::math::geometry::{intersect_triangle, Ray};
 use hexray::scene::Scene;
-use hexray::transport::faults::Faults;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -185,7 +184,14 @@ fn a_mesh_renders_bit_for_bit_alike_as_binary_ply_ascii_ply_obj_and_inline_trian
     assert_eq!(flats[0].triangles.len(), bare.triangles.len() + 6);
     let films: Vec<_> = loaded
         .iter()
-        .map(|s| render_cpu_scene(s, 24, 24, 2, 7, Faults::NONE).mean_image())
+        .map(|s| {
+            Render::scene(s)
+                .size(24, 24)
+                .spp(2)
+                .seed(7)
+                .cpu()
+                .mean_image()
+        })
         .collect();
     let bits =
         |img: &Vec<[f32; 3]>| -> Vec<u32> { img.iter().flatten().map(|x| x.to_bits()).collect() };
@@ -206,7 +212,12 @@ fn a_mesh_renders_bit_for_bit_alike_as_binary_ply_ascii_ply_obj_and_inline_trian
     }
     // And the mesh is in the picture: the bare room renders otherwise.
     let bare_scene = Scene::load(&repo(ROOM)).unwrap();
-    let bare_film = render_cpu_scene(&bare_scene, 24, 24, 2, 7, Faults::NONE).mean_image();
+    let bare_film = Render::scene(&bare_scene)
+        .size(24, 24)
+        .spp(2)
+        .seed(7)
+        .cpu()
+        .mean_image();
     assert_ne!(bits(&bare_film), reference, "the mesh is not visible");
 }
 
@@ -755,21 +766,16 @@ fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
 
 #[test]
 fn the_gpu_renders_the_bunny_room_as_the_cpu_does() {
-    let Some(gpu) = gpu() else {
+    if gpu().is_none() {
         return;
-    };
+    }
     const SIZE: u32 = 32;
     const SPP: u32 = 64;
-    let a = render_cpu("scenes/bunny_room.json", SIZE, SIZE, SPP, 1, Faults::NONE);
-    let b = render_gpu(
-        gpu,
-        "scenes/bunny_room.json",
-        SIZE,
-        SIZE,
-        SPP,
-        2,
-        Faults::NONE,
-    );
+    let render = Render::file("scenes/bunny_room.json")
+        .size(SIZE, SIZE)
+        .spp(SPP);
+    let a = render.seed(1).cpu();
+    let b = render.seed(2).gpu();
     let p = parity::parity(&a, &b);
     eprintln!("bunny_room at {SPP} spp, {SIZE}x{SIZE}: {p}");
     assert!(p.same(), "bunny_room: {p}");

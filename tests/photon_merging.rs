@@ -71,11 +71,16 @@ fn the_hash_grid_finds_exactly_the_vertices_within_the_radius() {
 /// corner is the grid's origin) at 64x64 holds them.
 #[test]
 fn gpu_hash_grid_finds_exactly_the_vertices_within_the_radius() {
-    let Some(gpu) = gpu() else {
+    if gpu().is_none() {
         return;
-    };
-    let (scene, flat) = load("scenes/tncg15_room.json");
-    let mut renderer = gpu_renderer(gpu, &scene, &flat, 64, 64, 1, Method::Sppm, Faults::NONE);
+    }
+    let rel = "scenes/tncg15_room.json";
+    let (_, flat) = load(rel);
+    let mut renderer = Render::file(rel)
+        .size(64, 64)
+        .seed(1)
+        .method(Method::Sppm)
+        .gpu_renderer();
     let queries = points(4096, 2);
     let min = hexray::transport::merging::scene_bounds(&flat).0;
     let mut total = 0;
@@ -147,9 +152,10 @@ fn vcm_without_merging_is_bdpt_bit_for_bit() {
         initial: 0.0,
         alpha: 0.75,
     };
-    let bdpt = render_cpu_method(scene, 48, 48, 3, 5, Method::Bdpt, Faults::NONE);
+    let render = Render::file(scene).size(48, 48).spp(3).seed(5);
+    let bdpt = render.method(Method::Bdpt).cpu();
     for method in [Method::Vcm, Method::VcmFull] {
-        let vcm = render_cpu_merging(scene, 48, 48, 3, 5, method, off, Faults::NONE);
+        let vcm = render.method(method).radius(off).cpu();
         assert!(
             vcm.pixels == bdpt.pixels,
             "{method} --radius 0 differs from bdpt"
@@ -159,7 +165,7 @@ fn vcm_without_merging_is_bdpt_bit_for_bit() {
             initial: 0.05,
             alpha: 0.75,
         };
-        let merged = render_cpu_merging(scene, 48, 48, 3, 5, method, on, Faults::NONE);
+        let merged = render.method(method).radius(on).cpu();
         assert!(merged.pixels != bdpt.pixels);
     }
 }
@@ -191,8 +197,12 @@ fn converges(scene: &str, reference: &str, method: Method, n: u32) {
     let (_, flat) = load(scene);
     let radius = MergeRadius::default_for(&flat, method);
     let truth = reference::read(reference);
-    let short = render_cpu_merging(scene, 32, 32, n, 11, method, radius, Faults::NONE);
-    let long = render_cpu_merging(scene, 32, 32, 4 * n, 12, method, radius, Faults::NONE);
+    let render = Render::file(scene)
+        .size(32, 32)
+        .method(method)
+        .radius(radius);
+    let short = render.spp(n).seed(11).cpu();
+    let long = render.spp(4 * n).seed(12).cpu();
     let (e_short, e_long) = (relmse(&short, &truth), relmse(&long, &truth));
     eprintln!(
         "{method} {scene}: relMSE {e_short:.3e} at {n} iterations, {e_long:.3e} at {}",
@@ -245,7 +255,14 @@ fn the_convergence_check_rejects_a_ball_kernel() {
         merge_kernel_ball: true,
         ..Faults::NONE
     };
-    let film = render_cpu_merging(CAUSTIC, 32, 32, 512, 12, Method::Vcm, radius, ball);
+    let film = Render::file(CAUSTIC)
+        .size(32, 32)
+        .spp(512)
+        .seed(12)
+        .method(Method::Vcm)
+        .radius(radius)
+        .faults(ball)
+        .cpu();
     let z = reference::film_mean_z("vcm with a ball kernel", &film, CAUSTIC_REFERENCE);
     assert!(!reference::means_agree(z));
 }
@@ -374,9 +391,15 @@ fn same_streams_at(
     radius: MergeRadius,
     gpu_faults: Faults,
 ) -> Option<usize> {
-    let gpu = gpu()?;
-    let a = render_cpu_merging(rel, 64, 64, 16, 7, method, radius, Faults::NONE);
-    let b = render_gpu_merging(gpu, rel, 64, 64, 16, 7, method, radius, gpu_faults);
+    gpu()?;
+    let render = Render::file(rel)
+        .size(64, 64)
+        .spp(16)
+        .seed(7)
+        .method(method)
+        .radius(radius);
+    let a = render.cpu();
+    let b = render.faults(gpu_faults).gpu();
     let (n, worst) = pixels_differing(&b, &a, ROUNDING_TERM);
     eprintln!(
         "{method} {rel}, same seed, GPU against CPU: {n} of 4096 pixels beyond a relative 1e-4 \
@@ -468,22 +491,17 @@ fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
 /// on an NVIDIA H100). As a check that the comparison can fail at all (a race cannot be planted
 /// on demand): a second render one seed over differs.
 fn gpu_renders_twice_bit_for_bit(method: Method, second_seed: u32) -> Option<bool> {
-    let gpu = gpu()?;
+    gpu()?;
     let rel = "scenes/tncg15_room.json";
     let (_, flat) = load(rel);
     let radius = MergeRadius::default_for(&flat, method);
-    let a = render_gpu_merging(gpu, rel, 64, 64, 8, 7, method, radius, Faults::NONE);
-    let b = render_gpu_merging(
-        gpu,
-        rel,
-        64,
-        64,
-        8,
-        second_seed,
-        method,
-        radius,
-        Faults::NONE,
-    );
+    let render = Render::file(rel)
+        .size(64, 64)
+        .spp(8)
+        .method(method)
+        .radius(radius);
+    let a = render.seed(7).gpu();
+    let b = render.seed(second_seed).gpu();
     Some(a.pixels == b.pixels)
 }
 
@@ -514,13 +532,18 @@ fn the_bit_for_bit_check_rejects_another_seed() {
 /// 4.5e-3 for vcm), and taking the connections in every wave (3.0). The first planted again on
 /// 2026-11-26 against the pixel count, on lavapipe: 1911 (sppm) and 532 (vcm) pixels differ.
 fn same_streams_in_waves(method: Method) -> Option<usize> {
-    let gpu = gpu()?;
+    gpu()?;
     let rel = "scenes/tncg15_room.json";
-    let (scene, flat) = load(rel);
+    let (_, flat) = load(rel);
     let radius = MergeRadius::default_for(&flat, method);
-    let a = render_cpu_merging(rel, 64, 64, 8, 7, method, radius, Faults::NONE);
-    let mut r = gpu_renderer(gpu, &scene, &flat, 64, 64, 7, method, Faults::NONE);
-    r.set_merge_radius(radius);
+    let render = Render::file(rel)
+        .size(64, 64)
+        .spp(8)
+        .seed(7)
+        .method(method)
+        .radius(radius);
+    let a = render.cpu();
+    let mut r = render.gpu_renderer();
     r.set_max_light_vertices(3000);
     let mut b = Film::new(64, 64);
     r.render(0, 8, &mut b).unwrap();
@@ -552,16 +575,17 @@ fn gpu_sppm_in_waves_equals_cpu_on_the_same_streams() {
 /// GPU's own BDPT differs between runs by about that much).
 #[test]
 fn gpu_vcm_without_merging_is_bdpt() {
-    let Some(gpu) = gpu() else {
+    if gpu().is_none() {
         return;
-    };
+    }
     let rel = "scenes/tncg15_room.json";
     let off = MergeRadius {
         initial: 0.0,
         alpha: 0.75,
     };
-    let vcm = render_gpu_merging(gpu, rel, 48, 48, 3, 5, Method::Vcm, off, Faults::NONE);
-    let bdpt = render_gpu_method(gpu, rel, 48, 48, 3, 5, Method::Bdpt, Faults::NONE);
+    let render = Render::file(rel).size(48, 48).spp(3).seed(5);
+    let vcm = render.method(Method::Vcm).radius(off).gpu();
+    let bdpt = render.method(Method::Bdpt).gpu();
     let e = relmse_between(&vcm, &bdpt);
     assert!(e < 1e-6, "relMSE {e:e}");
 }
@@ -578,32 +602,20 @@ const FURNACE_RADIUS: MergeRadius = MergeRadius {
     alpha: 1.0,
 };
 
-fn merging_furnace_cpu(method: Method, faults: Faults) -> Film {
-    render_cpu_merging(
-        SPHERE_FURNACE,
-        32,
-        32,
-        256,
-        21,
-        method,
-        FURNACE_RADIUS,
-        faults,
-    )
-}
-
-fn merging_furnace_gpu(method: Method, faults: Faults) -> Option<Film> {
-    let gpu = gpu()?;
-    Some(render_gpu_merging(
-        gpu,
-        SPHERE_FURNACE,
-        32,
-        32,
-        256,
-        22,
-        method,
-        FURNACE_RADIUS,
-        faults,
-    ))
+/// The merging furnace on `backend`: 256 iterations at 32x32, seed 21 on the CPU, 22 on the GPU.
+fn merging_furnace(backend: Backend, method: Method, faults: Faults) -> Film {
+    let seed = match backend {
+        Backend::Cpu => 21,
+        Backend::Gpu => 22,
+    };
+    Render::file(SPHERE_FURNACE)
+        .size(32, 32)
+        .spp(256)
+        .seed(seed)
+        .method(method)
+        .radius(FURNACE_RADIUS)
+        .faults(faults)
+        .on(backend)
 }
 
 const BALL: Faults = Faults {
@@ -611,55 +623,33 @@ const BALL: Faults = Faults {
     ..Faults::NONE
 };
 
-#[test]
-fn sppm_merging_furnace_is_exactly_1() {
-    let film = merging_furnace_cpu(Method::Sppm, Faults::NONE);
-    assert_mean_within_4_se(&film, [1.0; 3], "sppm in the merging furnace");
-}
-
-#[test]
-fn vcm_merging_furnace_is_exactly_1() {
-    for method in [Method::Vcm, Method::VcmFull] {
-        let film = merging_furnace_cpu(method, Faults::NONE);
-        assert_mean_within_4_se(&film, [1.0; 3], &format!("{method} in the merging furnace"));
+on_each_backend! {
+    fn sppm_merging_furnace_is_exactly_1(backend) {
+        let film = merging_furnace(backend, Method::Sppm, Faults::NONE);
+        assert_mean_within_4_se(&film, [1.0; 3], &format!("{backend} sppm in the merging furnace"));
     }
-}
 
-#[test]
-fn gpu_sppm_merging_furnace_is_exactly_1() {
-    if let Some(film) = merging_furnace_gpu(Method::Sppm, Faults::NONE) {
-        assert_mean_within_4_se(&film, [1.0; 3], "GPU sppm in the merging furnace");
-    }
-}
-
-#[test]
-fn gpu_vcm_merging_furnace_is_exactly_1() {
-    for method in [Method::Vcm, Method::VcmFull] {
-        if let Some(film) = merging_furnace_gpu(method, Faults::NONE) {
-            let what = format!("GPU {method} in the merging furnace");
+    fn vcm_merging_furnace_is_exactly_1(backend) {
+        for method in [Method::Vcm, Method::VcmFull] {
+            let film = merging_furnace(backend, method, Faults::NONE);
+            let what = format!("{backend} {method} in the merging furnace");
             assert_mean_within_4_se(&film, [1.0; 3], &what);
         }
     }
-}
 
-/// The furnace check has power: the 3-D ball's normalisation 1 / (4/3 π r³) instead of the
-/// disk's 1 / (π r²) scales every merge by 3 / (4r) = 7.5 at r = 0.1, and the image is far from 1
-/// on both backends and in both methods.
-#[test]
-fn the_merging_furnace_rejects_a_ball_kernel() {
-    let mut films = vec![
-        ("sppm", merging_furnace_cpu(Method::Sppm, BALL)),
-        ("vcm", merging_furnace_cpu(Method::Vcm, BALL)),
-    ];
-    films.extend(merging_furnace_gpu(Method::Sppm, BALL).map(|f| ("GPU sppm", f)));
-    films.extend(merging_furnace_gpu(Method::Vcm, BALL).map(|f| ("GPU vcm", f)));
-    for (what, film) in films {
-        let (mean, _, z) = image_mean_z(&film, [1.0; 3]);
-        eprintln!(
-            "{what} with a ball kernel: mean {:.4}, z {:.1}",
-            mean[0], z[0]
-        );
-        assert!(z.iter().all(|z| z.abs() > 4.0), "{what}: z {z:?}");
+    /// The furnace check has power: the 3-D ball's normalisation 1 / (4/3 π r³) instead of the
+    /// disk's 1 / (π r²) scales every merge by 3 / (4r) = 7.5 at r = 0.1, and the image is far
+    /// from 1 on both backends and in both methods.
+    fn the_merging_furnace_rejects_a_ball_kernel(backend) {
+        for method in [Method::Sppm, Method::Vcm] {
+            let film = merging_furnace(backend, method, BALL);
+            let (mean, _, z) = image_mean_z(&film, [1.0; 3]);
+            eprintln!(
+                "{backend} {method} with a ball kernel: mean {:.4}, z {:.1}",
+                mean[0], z[0]
+            );
+            assert!(z.iter().all(|z| z.abs() > 4.0), "{backend} {method}: z {z:?}");
+        }
     }
 }
 
@@ -668,52 +658,44 @@ const UNDIVIDED_ROULETTE: Faults = Faults {
     ..Faults::NONE
 };
 
-/// VCM's Russian roulette on merge queries (`subpath::merge_survival`) runs in the furnace, and
-/// the furnace sees it: queries rouletted but not divided by their survival probability lose
-/// the merged light of the queries they skip, and vcm-full's image falls below 1, on both
-/// backends. So `vcm_merging_furnace_is_exactly_1` also shows that the roulette, divided, is
-/// unbiased. vcm-full: the roulette acts where the camera subpath carries little, deep in it;
-/// vcm's camera subpaths end at their first diffuse vertex, where in the furnace the queries
-/// carry most of the light and hardly any falls under the threshold: with the fault planted its
-/// image is 1.0007 (z 0.48), against vcm-full's 0.9711 (z −29.4; GPU −31.1).
-#[test]
-fn the_merging_furnace_rejects_an_undivided_merge_roulette() {
-    let mut films = vec![(
-        "vcm-full",
-        merging_furnace_cpu(Method::VcmFull, UNDIVIDED_ROULETTE),
-    )];
-    films.extend(
-        merging_furnace_gpu(Method::VcmFull, UNDIVIDED_ROULETTE).map(|f| ("GPU vcm-full", f)),
-    );
-    for (what, film) in films {
+on_each_backend! {
+    /// VCM's Russian roulette on merge queries (`subpath::merge_survival`) runs in the furnace,
+    /// and the furnace sees it: queries rouletted but not divided by their survival probability
+    /// lose the merged light of the queries they skip, and vcm-full's image falls below 1, on
+    /// both backends. So `vcm_merging_furnace_is_exactly_1` also shows that the roulette,
+    /// divided, is unbiased. vcm-full: the roulette acts where the camera subpath carries
+    /// little, deep in it; vcm's camera subpaths end at their first diffuse vertex, where in the
+    /// furnace the queries carry most of the light and hardly any falls under the threshold:
+    /// with the fault planted its image is 1.0007 (z 0.48), against vcm-full's 0.9711 (z −29.4;
+    /// GPU −31.1).
+    fn the_merging_furnace_rejects_an_undivided_merge_roulette(backend) {
+        let film = merging_furnace(backend, Method::VcmFull, UNDIVIDED_ROULETTE);
         let (mean, _, z) = image_mean_z(&film, [1.0; 3]);
         eprintln!(
-            "{what} with an undivided merge roulette: mean {:.4}, z {:.1}",
+            "{backend} vcm-full with an undivided merge roulette: mean {:.4}, z {:.1}",
             mean[0], z[0]
         );
-        assert!(z.iter().all(|&z| z < -4.0), "{what}: z {z:?}");
+        assert!(z.iter().all(|&z| z < -4.0), "{backend} vcm-full: z {z:?}");
     }
-}
 
-/// Path tracing and BDPT in the same furnace: the sphere emitter (uniform points on the sphere,
-/// area pdf 1 / (4π r²), normals flipped inward) is sampled and hit consistently.
-#[test]
-fn path_and_bdpt_sphere_furnace_is_exactly_1() {
-    for method in [Method::Path, Method::Bdpt] {
-        let film = render_cpu_method(SPHERE_FURNACE, 32, 32, 256, 23, method, Faults::NONE);
-        assert_mean_within_4_se(&film, [1.0; 3], &format!("{method} in the sphere furnace"));
-    }
-}
-
-#[test]
-fn gpu_path_and_bdpt_sphere_furnace_is_exactly_1() {
-    let Some(gpu) = gpu() else {
-        return;
-    };
-    for method in [Method::Path, Method::Bdpt] {
-        let film = render_gpu_method(gpu, SPHERE_FURNACE, 32, 32, 256, 24, method, Faults::NONE);
-        let what = format!("GPU {method} in the sphere furnace");
-        assert_mean_within_4_se(&film, [1.0; 3], &what);
+    /// Path tracing and BDPT in the same furnace: the sphere emitter (uniform points on the
+    /// sphere, area pdf 1 / (4π r²), normals flipped inward) is sampled and hit consistently.
+    /// Seed 23 on the CPU, 24 on the GPU.
+    fn path_and_bdpt_sphere_furnace_is_exactly_1(backend) {
+        let seed = match backend {
+            Backend::Cpu => 23,
+            Backend::Gpu => 24,
+        };
+        for method in [Method::Path, Method::Bdpt] {
+            let film = Render::file(SPHERE_FURNACE)
+                .size(32, 32)
+                .spp(256)
+                .seed(seed)
+                .method(method)
+                .on(backend);
+            let what = format!("{backend} {method} in the sphere furnace");
+            assert_mean_within_4_se(&film, [1.0; 3], &what);
+        }
     }
 }
 
@@ -729,7 +711,7 @@ fn gpu_path_and_bdpt_sphere_furnace_is_exactly_1() {
 const FLOOR: &str = "scenes/analytic/merging_floor.json";
 
 fn radius_exponent(faults: Faults) -> (f64, f64) {
-    let reference = render_cpu_method(FLOOR, 32, 32, 4096, 31, Method::Path, Faults::NONE);
+    let reference = Render::file(FLOOR).size(32, 32).spp(4096).seed(31).cpu();
     let (ref_mean, ref_se) = reference.image_mean();
     let mut fit = Vec::new();
     for (k, r) in [0.1f32, 0.2, 0.3].into_iter().enumerate() {
@@ -737,16 +719,14 @@ fn radius_exponent(faults: Faults) -> (f64, f64) {
             initial: r,
             alpha: 1.0,
         };
-        let film = render_cpu_merging(
-            FLOOR,
-            32,
-            32,
-            8000,
-            32 + k as u32,
-            Method::Sppm,
-            radius,
-            faults,
-        );
+        let film = Render::file(FLOOR)
+            .size(32, 32)
+            .spp(8000)
+            .seed(32 + k as u32)
+            .method(Method::Sppm)
+            .radius(radius)
+            .faults(faults)
+            .cpu();
         let (mean, se) = film.image_mean();
         let bias = mean[0] - ref_mean[0];
         let se = (se[0] * se[0] + ref_se[0] * ref_se[0]).sqrt();

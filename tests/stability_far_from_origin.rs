@@ -44,7 +44,7 @@
 //! else). The camera is not the cause here: its basis is computed in f64 and rounded once, and
 //! its eye, an integer point, is exact up to 2^24.
 
-use crate::common::parity::{parity, render_cpu_shared, Parity};
+use crate::common::parity::{parity, Parity};
 use crate::common::*;
 use glam::Vec3;
 use hexray::accel::bvh::intersect_closest;
@@ -77,7 +77,21 @@ pub const DARK_MIRROR: Faults = Faults {
 
 /// The untranslated room at [`POWERFUL_SPP`], rendered once for all tests of this binary.
 pub fn room_reference() -> std::sync::Arc<hexray::film::Film> {
-    render_cpu_shared(ROOM, SIZE, SIZE, POWERFUL_SPP, ROOM_SEED, Faults::NONE)
+    Render::file(ROOM)
+        .size(SIZE, SIZE)
+        .spp(POWERFUL_SPP)
+        .seed(ROOM_SEED)
+        .cpu_shared()
+}
+
+/// The room with mirrors 3 % too dark at [`POWERFUL_SPP`], rendered once for all tests.
+pub fn dark_mirror_room() -> std::sync::Arc<hexray::film::Film> {
+    Render::file(ROOM)
+        .size(SIZE, SIZE)
+        .spp(POWERFUL_SPP)
+        .seed(DARK_MIRROR_SEED)
+        .faults(DARK_MIRROR)
+        .cpu_shared()
 }
 
 /// Each scene gets its own seeds (independent of the reference's and of each other's).
@@ -95,122 +109,75 @@ fn scene(name: &str) -> (String, u32) {
     (format!("scenes/stability/tncg15_{name}.json"), seed)
 }
 
-fn cpu_parity(name: &str) -> Parity {
+/// The scene `name` against the untranslated CPU room: on the CPU at [`POWERFUL_SPP`] with its
+/// seed (shared: the power test compares it too), on the GPU at [`GPU_SPP`] with its seed + 100.
+fn moved_parity(backend: Backend, name: &str, faults: Faults) -> Parity {
     let (rel, seed) = scene(name);
-    let moved = render_cpu_shared(&rel, SIZE, SIZE, POWERFUL_SPP, seed, Faults::NONE);
+    let render = Render::file(&rel).size(SIZE, SIZE).faults(faults);
+    let (moved, spp) = match backend {
+        Backend::Cpu => (
+            render.spp(POWERFUL_SPP).seed(seed).cpu_shared(),
+            POWERFUL_SPP,
+        ),
+        Backend::Gpu => (
+            std::sync::Arc::new(render.spp(GPU_SPP).seed(seed + 100).gpu()),
+            GPU_SPP,
+        ),
+    };
     let p = parity(&room_reference(), &moved);
-    eprintln!("CPU {name} at {POWERFUL_SPP} spp against the room: {p}");
+    eprintln!("{backend} {name} at {spp} spp against the CPU room: {p}");
     p
 }
 
-fn gpu_parity(name: &str, faults: Faults) -> Option<Parity> {
-    let gpu = gpu()?;
-    let (rel, seed) = scene(name);
-    let moved = render_gpu(gpu, &rel, SIZE, SIZE, GPU_SPP, seed + 100, faults);
-    let p = parity(&room_reference(), &moved);
-    eprintln!("GPU {name} at {GPU_SPP} spp against the CPU room: {p}");
-    Some(p)
+fn assert_same(backend: Backend, name: &str) {
+    let p = moved_parity(backend, name, Faults::NONE);
+    assert!(p.same(), "{backend} {name} differs from the room: {p}");
 }
 
-fn assert_cpu_same(name: &str) {
-    let p = cpu_parity(name);
-    assert!(p.same(), "CPU {name} differs from the room: {p}");
-}
-
-fn assert_gpu_same(name: &str) {
-    if let Some(p) = gpu_parity(name, Faults::NONE) {
-        assert!(p.same(), "GPU {name} differs from the room: {p}");
+on_each_backend! {
+    fn room_translated_by_1e3_renders_the_same_image(backend) {
+        assert_same(backend, "translated_1e3");
     }
-}
 
-#[test]
-fn cpu_room_translated_by_1e3_renders_the_same_image() {
-    assert_cpu_same("translated_1e3");
-}
+    fn room_translated_by_1e4_renders_the_same_image(backend) {
+        assert_same(backend, "translated_1e4");
+    }
 
-#[test]
-fn cpu_room_translated_by_1e4_renders_the_same_image() {
-    assert_cpu_same("translated_1e4");
-}
+    fn room_translated_by_1e5_renders_the_same_image(backend) {
+        assert_same(backend, "translated_1e5");
+    }
 
-#[test]
-fn cpu_room_translated_by_1e5_renders_the_same_image() {
-    assert_cpu_same("translated_1e5");
-}
+    fn room_scaled_by_1e_minus_3_renders_the_same_image(backend) {
+        assert_same(backend, "scaled_1e-3");
+    }
 
-#[test]
-fn cpu_room_scaled_by_1e_minus_3_renders_the_same_image() {
-    assert_cpu_same("scaled_1e-3");
-}
+    fn room_scaled_by_1e3_renders_the_same_image(backend) {
+        assert_same(backend, "scaled_1e3");
+    }
 
-#[test]
-fn cpu_room_scaled_by_1e3_renders_the_same_image() {
-    assert_cpu_same("scaled_1e3");
-}
-
-#[test]
-fn gpu_room_translated_by_1e3_renders_the_same_image() {
-    assert_gpu_same("translated_1e3");
-}
-
-#[test]
-fn gpu_room_translated_by_1e4_renders_the_same_image() {
-    assert_gpu_same("translated_1e4");
-}
-
-#[test]
-fn gpu_room_translated_by_1e5_renders_the_same_image() {
-    assert_gpu_same("translated_1e5");
-}
-
-#[test]
-fn gpu_room_scaled_by_1e_minus_3_renders_the_same_image() {
-    assert_gpu_same("scaled_1e-3");
-}
-
-#[test]
-fn gpu_room_scaled_by_1e3_renders_the_same_image() {
-    assert_gpu_same("scaled_1e3");
-}
-
-/// BDPT far from the origin: the room moved to 1e5 renders, with BDPT, the image the room
-/// renders with path tracing at the origin (the same parity statistic; BDPT's block variances are
-/// checked in tests/standard_error.rs). Its connections and splats spawn rays at both ends of
-/// every edge, and its MIS densities hold squared distances: both must survive the move.
-#[test]
-fn cpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
-    let (rel, seed) = scene("translated_1e5");
-    let moved = render_cpu_method(
-        &rel,
-        SIZE,
-        SIZE,
-        512,
-        seed + 200,
-        hexray::transport::method::Method::Bdpt,
-        Faults::NONE,
-    );
-    let p = parity(&room_reference(), &moved);
-    eprintln!("CPU BDPT translated_1e5 at 512 iterations against the room: {p}");
-    assert!(p.same(), "CPU BDPT at 1e5 differs from the room: {p}");
-}
-
-#[test]
-fn gpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
-    let Some(gpu) = gpu() else { return };
-    let (rel, seed) = scene("translated_1e5");
-    let moved = render_gpu_method(
-        gpu,
-        &rel,
-        SIZE,
-        SIZE,
-        128,
-        seed + 300,
-        hexray::transport::method::Method::Bdpt,
-        Faults::NONE,
-    );
-    let p = parity(&room_reference(), &moved);
-    eprintln!("GPU BDPT translated_1e5 at 128 iterations against the CPU room: {p}");
-    assert!(p.same(), "GPU BDPT at 1e5 differs from the room: {p}");
+    /// BDPT far from the origin: the room moved to 1e5 renders, with BDPT, the image the room
+    /// renders with path tracing at the origin (the same parity statistic; BDPT's block
+    /// variances are checked in tests/standard_error.rs). Its connections and splats spawn rays
+    /// at both ends of every edge, and its MIS densities hold squared distances: both must
+    /// survive the move. The CPU renders 512 iterations (seed + 200), the GPU 128 (seed + 300).
+    fn bdpt_room_translated_by_1e5_renders_the_same_image(backend) {
+        let (rel, seed) = scene("translated_1e5");
+        let (iterations, seed) = match backend {
+            Backend::Cpu => (512, seed + 200),
+            Backend::Gpu => (128, seed + 300),
+        };
+        let moved = Render::file(&rel)
+            .size(SIZE, SIZE)
+            .spp(iterations)
+            .seed(seed)
+            .method(hexray::transport::method::Method::Bdpt)
+            .on(backend);
+        let p = parity(&room_reference(), &moved);
+        eprintln!(
+            "{backend} BDPT translated_1e5 at {iterations} iterations against the CPU room: {p}"
+        );
+        assert!(p.same(), "{backend} BDPT at 1e5 differs from the room: {p}");
+    }
 }
 
 /// Power: the room translated by 1e5, against the untranslated room rendered with mirrors
@@ -218,16 +185,12 @@ fn gpu_bdpt_room_translated_by_1e5_renders_the_same_image() {
 #[test]
 fn far_from_origin_parity_rejects_a_mirror_3_percent_too_dark() {
     let (rel, seed) = scene("translated_1e5");
-    let moved = render_cpu_shared(&rel, SIZE, SIZE, POWERFUL_SPP, seed, Faults::NONE);
-    let dark = render_cpu_shared(
-        ROOM,
-        SIZE,
-        SIZE,
-        POWERFUL_SPP,
-        DARK_MIRROR_SEED,
-        DARK_MIRROR,
-    );
-    let p = parity(&dark, &moved);
+    let moved = Render::file(&rel)
+        .size(SIZE, SIZE)
+        .spp(POWERFUL_SPP)
+        .seed(seed)
+        .cpu_shared();
+    let p = parity(&dark_mirror_room(), &moved);
     eprintln!("translated_1e5 against a room with 3 % dark mirrors: {p}");
     assert!(!p.same(), "a 3 % dark mirror passed: {p}");
 }
@@ -239,9 +202,11 @@ fn far_from_origin_gpu_parity_rejects_a_gpu_mirror_8_percent_too_dark() {
         specular_scale: 0.92,
         ..Faults::NONE
     };
-    if let Some(p) = gpu_parity("translated_1e5", dark) {
-        assert!(!p.same(), "an 8 % dark GPU mirror passed: {p}");
+    if gpu().is_none() {
+        return;
     }
+    let p = moved_parity(Backend::Gpu, "translated_1e5", dark);
+    assert!(!p.same(), "an 8 % dark GPU mirror passed: {p}");
 }
 
 /// Where f32 ends: the same statistics at 1e6 and 1e7 (the numbers in the issue report). Not run
@@ -254,8 +219,8 @@ fn far_from_origin_gpu_parity_rejects_a_gpu_mirror_8_percent_too_dark() {
 #[ignore]
 fn where_f32_ends_1e6_and_1e7_are_rejected() {
     for name in ["translated_1e6", "translated_1e7"] {
-        let p = cpu_parity(name);
-        let g = gpu_parity(name, Faults::NONE);
+        let p = moved_parity(Backend::Cpu, name, Faults::NONE);
+        let g = gpu().map(|_| moved_parity(Backend::Gpu, name, Faults::NONE));
         self_hits(&scene(name).0, offset_ray_origin);
         assert!(!p.same(), "CPU {name} passed: {p}");
         if let Some(g) = g {

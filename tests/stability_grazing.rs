@@ -127,36 +127,41 @@ fn report_with(film: &Film, exact_of: &SceneDesc, exact_wall: bool) -> (TruthRep
     (against_truth(film, &exact, plane_rows, 0.01), bad)
 }
 
+/// A path-traced render of a scene on `backend` with the seed `cpu_seed` or `gpu_seed`.
+fn render(
+    backend: Backend,
+    scene: &Scene,
+    (cpu_seed, gpu_seed): (u32, u32),
+    faults: Faults,
+) -> Film {
+    let seed = match backend {
+        Backend::Cpu => cpu_seed,
+        Backend::Gpu => gpu_seed,
+    };
+    Render::scene(scene)
+        .size(SIZE, SIZE)
+        .spp(SPP)
+        .seed(seed)
+        .faults(faults)
+        .on(backend)
+}
+
 /// Renders `view` of the scene (after `planted`, a change the exact image does not know about)
-/// and compares it with the exact image of `view`.
+/// on `backend` (seed 60 + the view's on the CPU, 62 + the view's on the GPU) and compares it
+/// with the exact image of `view`.
 fn grazing(
-    view: fn(&mut SceneDesc),
-    planted: fn(&mut SceneDesc),
-    render: &dyn Fn(&Scene) -> Film,
-) -> (TruthReport, usize) {
-    let truth = load_changed(SCENE, view);
-    let film = render(&load_changed(SCENE, |d| {
-        view(d);
-        planted(d);
-    }));
-    report(&film, &truth.desc)
-}
-
-fn cpu(view: View, planted: fn(&mut SceneDesc), faults: Faults) -> (TruthReport, usize) {
-    grazing(view.change, planted, &|s| {
-        render_cpu_scene(s, SIZE, SIZE, SPP, 60 + view.seed, faults)
-    })
-}
-
-fn gpu_run(
+    backend: Backend,
     view: View,
     planted: fn(&mut SceneDesc),
     faults: Faults,
-) -> Option<(TruthReport, usize)> {
-    let gpu = gpu()?;
-    Some(grazing(view.change, planted, &|s| {
-        render_gpu_scene(gpu, s, SIZE, SIZE, SPP, 62 + view.seed, faults)
-    }))
+) -> (TruthReport, usize) {
+    let truth = load_changed(SCENE, view.change);
+    let scene = load_changed(SCENE, |d| {
+        (view.change)(d);
+        planted(d);
+    });
+    let seeds = (60 + view.seed, 62 + view.seed);
+    report(&render(backend, &scene, seeds, faults), &truth.desc)
 }
 
 /// A camera for the exact-image test, with its own seed: the sampler's streams depend on the
@@ -197,30 +202,16 @@ fn assert_rejected(what: &str, (r, _): (TruthReport, usize)) {
     r.assert_rejected_as_too_dark(what);
 }
 
-#[test]
-fn grazing_plane_is_albedo_times_le_at_80_to_89_7_degrees_on_the_cpu() {
-    assert_exact("CPU grazing 80-89.7", cpu(WIDE, unchanged, Faults::NONE));
-}
+on_each_backend! {
+    fn grazing_plane_is_albedo_times_le_at_80_to_89_7_degrees(backend) {
+        let r = grazing(backend, WIDE, unchanged, Faults::NONE);
+        assert_exact(&format!("{backend} grazing 80-89.7"), r);
+    }
 
-#[test]
-fn grazing_plane_is_albedo_times_le_at_89_to_89_9_degrees_on_the_cpu() {
-    assert_exact("CPU grazing 89-89.9", cpu(NARROW, unchanged, Faults::NONE));
-}
-
-#[test]
-fn grazing_plane_is_albedo_times_le_at_80_to_89_7_degrees_on_the_gpu() {
-    let Some(r) = gpu_run(WIDE, unchanged, Faults::NONE) else {
-        return;
-    };
-    assert_exact("GPU grazing 80-89.7", r);
-}
-
-#[test]
-fn grazing_plane_is_albedo_times_le_at_89_to_89_9_degrees_on_the_gpu() {
-    let Some(r) = gpu_run(NARROW, unchanged, Faults::NONE) else {
-        return;
-    };
-    assert_exact("GPU grazing 89-89.9", r);
+    fn grazing_plane_is_albedo_times_le_at_89_to_89_9_degrees(backend) {
+        let r = grazing(backend, NARROW, unchanged, Faults::NONE);
+        assert_exact(&format!("{backend} grazing 89-89.9"), r);
+    }
 }
 
 const ONE_BOUNCE: Faults = Faults {
@@ -234,33 +225,28 @@ fn albedo_2_percent_low(d: &mut SceneDesc) {
         .insert("plane".into(), MaterialDesc::Diffuse { albedo });
 }
 
-#[test]
-fn grazing_test_rejects_one_bounce_paths_on_the_cpu() {
-    assert_rejected("CPU grazing, one bounce", cpu(WIDE, unchanged, ONE_BOUNCE));
-}
-
-#[test]
-fn grazing_test_rejects_one_bounce_paths_on_the_gpu() {
-    let Some(r) = gpu_run(WIDE, unchanged, ONE_BOUNCE) else {
-        return;
-    };
-    assert_rejected("GPU grazing, one bounce", r);
+on_each_backend! {
+    fn grazing_test_rejects_one_bounce_paths(backend) {
+        let r = grazing(backend, WIDE, unchanged, ONE_BOUNCE);
+        assert_rejected(&format!("{backend} grazing, one bounce"), r);
+    }
 }
 
 #[test]
 fn grazing_test_rejects_an_albedo_2_percent_low_on_the_cpu() {
     assert_rejected(
         "CPU grazing, albedo 2 % low",
-        cpu(WIDE, albedo_2_percent_low, Faults::NONE),
+        grazing(Backend::Cpu, WIDE, albedo_2_percent_low, Faults::NONE),
     );
 }
 
-/// Pixels with light seen from below the plane.
-fn from_below(planted: fn(&mut SceneDesc), render: &dyn Fn(&Scene) -> Film) -> (usize, u64) {
-    let film = render(&load_changed(SCENE, |d| {
+/// Pixels with light seen from below the plane (seed 64 on the CPU, 65 on the GPU).
+fn from_below(backend: Backend, planted: fn(&mut SceneDesc)) -> (usize, u64) {
+    let scene = load_changed(SCENE, |d| {
         below(d);
         planted(d);
-    }));
+    });
+    let film = render(backend, &scene, (64, 65), Faults::NONE);
     (lit_pixels(&film).len(), film.dropped())
 }
 
@@ -273,97 +259,46 @@ fn remove_a_plane_triangle(d: &mut SceneDesc) {
     d.triangles.remove(i);
 }
 
-fn assert_dark_below(backend: &str, (lit, dropped): (usize, u64)) {
+fn assert_dark_below(backend: Backend, (lit, dropped): (usize, u64)) {
     eprintln!("{backend} under the grazing plane: {lit} lit pixels, {dropped} dropped");
     assert_eq!(lit, 0, "{backend}: light under the plane in {lit} pixels");
     assert_eq!(dropped, 0);
 }
 
-#[test]
-fn grazing_plane_lets_no_light_through_on_the_cpu() {
-    assert_dark_below(
-        "CPU",
-        from_below(unchanged, &|s| {
-            render_cpu_scene(s, SIZE, SIZE, SPP, 64, Faults::NONE)
-        }),
-    );
-}
+on_each_backend! {
+    fn grazing_plane_lets_no_light_through(backend) {
+        assert_dark_below(backend, from_below(backend, unchanged));
+    }
 
-#[test]
-fn grazing_plane_lets_no_light_through_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    assert_dark_below(
-        "GPU",
-        from_below(unchanged, &|s| {
-            render_gpu_scene(gpu, s, SIZE, SIZE, SPP, 65, Faults::NONE)
-        }),
-    );
-}
-
-/// Power: through a missing triangle the sky is seen from below.
-#[test]
-fn grazing_leak_test_rejects_a_missing_triangle_on_the_cpu() {
-    let (lit, _) = from_below(remove_a_plane_triangle, &|s| {
-        render_cpu_scene(s, SIZE, SIZE, SPP, 64, Faults::NONE)
-    });
-    eprintln!("CPU under a plane missing a triangle: {lit} lit pixels");
-    assert!(lit > 0, "a hole in the plane went unnoticed");
-}
-
-#[test]
-fn grazing_leak_test_rejects_a_missing_triangle_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    let (lit, _) = from_below(remove_a_plane_triangle, &|s| {
-        render_gpu_scene(gpu, s, SIZE, SIZE, SPP, 65, Faults::NONE)
-    });
-    eprintln!("GPU under a plane missing a triangle: {lit} lit pixels");
-    assert!(lit > 0, "a hole in the plane went unnoticed");
+    /// Power: through a missing triangle the sky is seen from below.
+    fn grazing_leak_test_rejects_a_missing_triangle(backend) {
+        let (lit, _) = from_below(backend, remove_a_plane_triangle);
+        eprintln!("{backend} under a plane missing a triangle: {lit} lit pixels");
+        assert!(lit > 0, "{backend}: a hole in the plane went unnoticed");
+    }
 }
 
 // BDPT on the same views: the plane at grazing incidence is lit by next-event estimation,
 // by the camera subpaths that hit the wall and by the wall's light points splatted through the
 // plane's vertices, all weighted by MIS; the rows must still be exactly albedo x Le.
 
-fn bdpt(view: View, render: &dyn Fn(&Scene) -> Film) -> (TruthReport, usize) {
-    let truth = load_changed(SCENE, view.change);
-    let film = render(&truth);
-    report_with(&film, &truth.desc, false)
-}
-
-#[test]
-fn grazing_plane_is_albedo_times_le_with_bdpt_on_the_cpu() {
-    for view in [WIDE, NARROW] {
-        let r = bdpt(view, &|s| {
-            render_cpu_scene_method(
-                s,
-                SIZE,
-                SIZE,
-                SPP,
-                66 + view.seed,
-                Method::Bdpt,
-                Faults::NONE,
-            )
-        });
-        assert_exact(&format!("CPU BDPT grazing, view {}", view.seed), r);
-    }
-}
-
-#[test]
-fn grazing_plane_is_albedo_times_le_with_bdpt_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    for view in [WIDE, NARROW] {
-        let r = bdpt(view, &|s| {
-            render_gpu_scene_method(
-                gpu,
-                s,
-                SIZE,
-                SIZE,
-                SPP,
-                68 + view.seed,
-                Method::Bdpt,
-                Faults::NONE,
-            )
-        });
-        assert_exact(&format!("GPU BDPT grazing, view {}", view.seed), r);
+on_each_backend! {
+    /// Seed 66 + the view's on the CPU, 68 + the view's on the GPU.
+    fn grazing_plane_is_albedo_times_le_with_bdpt(backend) {
+        let seed = match backend {
+            Backend::Cpu => 66,
+            Backend::Gpu => 68,
+        };
+        for view in [WIDE, NARROW] {
+            let truth = load_changed(SCENE, view.change);
+            let film = Render::scene(&truth)
+                .size(SIZE, SIZE)
+                .spp(SPP)
+                .seed(seed + view.seed)
+                .method(Method::Bdpt)
+                .on(backend);
+            let r = report_with(&film, &truth.desc, false);
+            assert_exact(&format!("{backend} BDPT grazing, view {}", view.seed), r);
+        }
     }
 }

@@ -30,53 +30,65 @@
 //! the mirrored light. BDPT renders the two scenes (and the tinted pair) the same, with the same
 //! statistic at 1024 iterations; the mirror's light counted twice is rejected.
 
-use crate::common::parity::{parity, render_cpu_method_shared, render_cpu_shared, Parity};
+use crate::common::parity::{parity, Parity};
 use crate::common::*;
 use crate::stability_far_from_origin::{
-    room_reference, DARK_MIRROR, DARK_MIRROR_SEED, GPU_SPP, POWERFUL_SPP, ROOM, ROOM_SEED, SIZE,
+    dark_mirror_room, room_reference, GPU_SPP, POWERFUL_SPP, ROOM, SIZE,
 };
+use hexray::film::Film;
 use hexray::scene::SceneDesc;
 use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 const DOUBLED: &str = "scenes/stability/tncg15_mirror_doubled.json";
 const TINTED: &str = "scenes/stability/tncg15_mirror_tinted.json";
 const WINDOW: &str = "scenes/stability/tncg15_doubled_tinted_window.json";
 const MIRROR_Y: f64 = -6.0;
 
-fn doubled_room() -> std::sync::Arc<hexray::film::Film> {
-    render_cpu_shared(DOUBLED, SIZE, SIZE, POWERFUL_SPP, 121, Faults::NONE)
+/// A path-traced CPU render at [`POWERFUL_SPP`], rendered once for all tests.
+fn shared(rel: &str, seed: u32, faults: Faults) -> Arc<Film> {
+    Render::file(rel)
+        .size(SIZE, SIZE)
+        .spp(POWERFUL_SPP)
+        .seed(seed)
+        .faults(faults)
+        .cpu_shared()
 }
 
-#[test]
-fn mirror_of_reflectance_1_renders_the_doubled_room() {
-    let p = parity(&doubled_room(), &room_reference());
-    eprintln!("room (seed {ROOM_SEED}) against the doubled room at {POWERFUL_SPP} spp: {p}");
-    assert!(
-        p.same(),
-        "the mirror room differs from the doubled room: {p}"
-    );
+fn doubled_room() -> Arc<Film> {
+    shared(DOUBLED, 121, Faults::NONE)
 }
 
-#[test]
-fn gpu_mirror_of_reflectance_1_renders_the_doubled_room() {
-    let Some(gpu) = gpu() else {
-        return;
-    };
-    let room = render_gpu(gpu, ROOM, SIZE, SIZE, GPU_SPP, 221, Faults::NONE);
-    let p = parity(&doubled_room(), &room);
-    eprintln!("GPU room at {GPU_SPP} spp against the CPU's doubled room: {p}");
-    assert!(
-        p.same(),
-        "the GPU's mirror room differs from the doubled room: {p}"
-    );
+on_each_backend! {
+    /// The CPU's room (its reference render, seed 101, [`POWERFUL_SPP`]) or the GPU's (seed 221,
+    /// [`GPU_SPP`]) against the CPU's doubled room.
+    fn mirror_of_reflectance_1_renders_the_doubled_room(backend) {
+        let (room, spp) = match backend {
+            Backend::Cpu => (room_reference(), POWERFUL_SPP),
+            Backend::Gpu => {
+                let room = Render::file(ROOM)
+                    .size(SIZE, SIZE)
+                    .spp(GPU_SPP)
+                    .seed(221)
+                    .gpu();
+                (Arc::new(room), GPU_SPP)
+            }
+        };
+        let p = parity(&doubled_room(), &room);
+        eprintln!("{backend} room at {spp} spp against the CPU's doubled room: {p}");
+        assert!(
+            p.same(),
+            "the {backend}'s mirror room differs from the doubled room: {p}"
+        );
+    }
 }
 
 #[test]
 fn tinted_mirror_renders_the_doubled_room_behind_a_tinted_window() {
-    let mirror = render_cpu_shared(TINTED, SIZE, SIZE, POWERFUL_SPP, 122, Faults::NONE);
-    let window = render_cpu_shared(WINDOW, SIZE, SIZE, POWERFUL_SPP, 123, Faults::NONE);
+    let mirror = shared(TINTED, 122, Faults::NONE);
+    let window = shared(WINDOW, 123, Faults::NONE);
     let p = parity(&window, &mirror);
     eprintln!("tinted mirror against the tinted window at {POWERFUL_SPP} spp: {p}");
     assert!(p.same(), "the tinted mirror differs from the window: {p}");
@@ -85,15 +97,7 @@ fn tinted_mirror_renders_the_doubled_room_behind_a_tinted_window() {
 /// Power: the room rendered with mirrors reflecting 97 % of what they should is rejected.
 #[test]
 fn mirror_test_rejects_a_mirror_3_percent_too_dark() {
-    let dark = render_cpu_shared(
-        ROOM,
-        SIZE,
-        SIZE,
-        POWERFUL_SPP,
-        DARK_MIRROR_SEED,
-        DARK_MIRROR,
-    );
-    let p = parity(&doubled_room(), &dark);
+    let p = parity(&doubled_room(), &dark_mirror_room());
     eprintln!("room with 3 % dark mirrors against the doubled room: {p}");
     assert!(!p.same(), "a 3 % dark mirror passed: {p}");
 }
@@ -107,8 +111,8 @@ fn tinted_mirror_test_rejects_a_mirror_5_percent_too_dark() {
         specular_scale: 0.95,
         ..Faults::NONE
     };
-    let dark = render_cpu_shared(TINTED, SIZE, SIZE, POWERFUL_SPP, 124, faults);
-    let window = render_cpu_shared(WINDOW, SIZE, SIZE, POWERFUL_SPP, 123, Faults::NONE);
+    let dark = shared(TINTED, 124, faults);
+    let window = shared(WINDOW, 123, Faults::NONE);
     let p = parity(&window, &dark);
     eprintln!("tinted mirror 5 % too dark against the tinted window: {p}");
     assert!(!p.same(), "a 5 % dark tinted mirror passed: {p}");
@@ -122,17 +126,15 @@ const BDPT_ITERATIONS: u32 = 1024;
 /// doubled room, where the light the mirror shows is a light of its own, sampled by ordinary
 /// next-event estimation; other seeds.
 fn bdpt_room_against_doubled(rel: &str, doubled: &str, faults: Faults) -> Parity {
-    let room = render_cpu_method(rel, SIZE, SIZE, BDPT_ITERATIONS, 125, Method::Bdpt, faults);
+    fn bdpt(rel: &str) -> Render<'_> {
+        Render::file(rel)
+            .size(SIZE, SIZE)
+            .spp(BDPT_ITERATIONS)
+            .method(Method::Bdpt)
+    }
+    let room = bdpt(rel).seed(125).faults(faults).cpu();
     // Shared: the planted fault's test compares against the same render of the doubled room.
-    let doubled = render_cpu_method_shared(
-        doubled,
-        SIZE,
-        SIZE,
-        BDPT_ITERATIONS,
-        126,
-        Method::Bdpt,
-        Faults::NONE,
-    );
+    let doubled = bdpt(doubled).seed(126).cpu_shared();
     parity(&doubled, &room)
 }
 

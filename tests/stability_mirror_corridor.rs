@@ -25,6 +25,7 @@
 use crate::common::*;
 use hexray::scene::SceneDesc;
 use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const SCENE: &str = "scenes/stability/mirror_corridor.json";
 const SIZE: u32 = 64;
@@ -288,15 +289,24 @@ fn compare(film: &hexray::film::Film) -> TruthReport {
     against_truth(film, &exact, blocks, ALPHA)
 }
 
-fn cpu(faults: Faults) -> TruthReport {
-    compare(&render_cpu(SCENE, SIZE, SIZE, SPP, 30, faults))
-}
-
-fn gpu_report(faults: Faults) -> Option<TruthReport> {
-    let gpu = gpu()?;
-    Some(compare(&render_gpu(
-        gpu, SCENE, SIZE, SIZE, SPP, 31, faults,
-    )))
+/// The corridor rendered with `method` on `backend` against the series: path tracing with seed
+/// 30 on the CPU, 31 on the GPU; BDPT with 32 and 33.
+fn report(backend: Backend, method: Method, faults: Faults) -> TruthReport {
+    let seed = match (method, backend) {
+        (Method::Bdpt, Backend::Cpu) => 32,
+        (Method::Bdpt, Backend::Gpu) => 33,
+        (_, Backend::Cpu) => 30,
+        (_, Backend::Gpu) => 31,
+    };
+    compare(
+        &Render::file(SCENE)
+            .size(SIZE, SIZE)
+            .spp(SPP)
+            .seed(seed)
+            .method(method)
+            .faults(faults)
+            .on(backend),
+    )
 }
 
 const DEPTH_CAP: Faults = Faults {
@@ -338,48 +348,23 @@ fn mirror_corridor_unfolding_matches_tracing_in_f64() {
     );
 }
 
-#[test]
-fn mirror_corridor_matches_the_series_on_the_cpu() {
-    let r = cpu(Faults::NONE);
-    r.assert_agrees("CPU mirror corridor");
-}
+on_each_backend! {
+    fn mirror_corridor_matches_the_series(backend) {
+        let r = report(backend, Method::Path, Faults::NONE);
+        r.assert_agrees(&format!("{backend} mirror corridor"));
+    }
 
-#[test]
-fn mirror_corridor_matches_the_series_on_the_gpu() {
-    let Some(r) = gpu_report(Faults::NONE) else {
-        return;
-    };
-    r.assert_agrees("GPU mirror corridor");
-}
+    /// Power: a maximum depth of 8 bounces loses every crossing from the 9th on.
+    fn mirror_corridor_rejects_a_depth_cap(backend) {
+        let r = report(backend, Method::Path, DEPTH_CAP);
+        r.assert_rejected_as_too_dark(&format!("{backend} mirror corridor, depth cap 8"));
+    }
 
-/// Power: a maximum depth of 8 bounces loses every crossing from the 9th on.
-#[test]
-fn mirror_corridor_rejects_a_depth_cap_on_the_cpu() {
-    let r = cpu(DEPTH_CAP);
-    r.assert_rejected_as_too_dark("CPU mirror corridor, depth cap 8");
-}
-
-/// ... and mirrors that reflect 97 % (0.97^k at crossing k).
-#[test]
-fn mirror_corridor_rejects_a_dim_mirror_on_the_cpu() {
-    let r = cpu(DIM_MIRROR);
-    r.assert_rejected_as_too_dark("CPU mirror corridor, mirror 0.97");
-}
-
-#[test]
-fn mirror_corridor_rejects_a_depth_cap_on_the_gpu() {
-    let Some(r) = gpu_report(DEPTH_CAP) else {
-        return;
-    };
-    r.assert_rejected_as_too_dark("GPU mirror corridor, depth cap 8");
-}
-
-#[test]
-fn mirror_corridor_rejects_a_dim_mirror_on_the_gpu() {
-    let Some(r) = gpu_report(DIM_MIRROR) else {
-        return;
-    };
-    r.assert_rejected_as_too_dark("GPU mirror corridor, mirror 0.97");
+    /// ... and mirrors that reflect 97 % (0.97^k at crossing k).
+    fn mirror_corridor_rejects_a_dim_mirror(backend) {
+        let r = report(backend, Method::Path, DIM_MIRROR);
+        r.assert_rejected_as_too_dark(&format!("{backend} mirror corridor, mirror 0.97"));
+    }
 }
 
 // BDPT: the corridor's mirrors are specular, so no light vertex is stored and no connection is
@@ -387,54 +372,14 @@ fn mirror_corridor_rejects_a_dim_mirror_on_the_gpu() {
 // from next-event estimation where a camera vertex is diffuse, weighted by MIS, and must match
 // the same series; a depth cap of 8 must be rejected the same way.
 
-fn bdpt_cpu(faults: Faults) -> TruthReport {
-    compare(&render_cpu_method(
-        SCENE,
-        SIZE,
-        SIZE,
-        SPP,
-        32,
-        hexray::transport::method::Method::Bdpt,
-        faults,
-    ))
-}
+on_each_backend! {
+    fn mirror_corridor_matches_the_series_with_bdpt(backend) {
+        let r = report(backend, Method::Bdpt, Faults::NONE);
+        r.assert_agrees(&format!("{backend} BDPT mirror corridor"));
+    }
 
-fn bdpt_gpu(faults: Faults) -> Option<TruthReport> {
-    let gpu = gpu()?;
-    Some(compare(&render_gpu_method(
-        gpu,
-        SCENE,
-        SIZE,
-        SIZE,
-        SPP,
-        33,
-        hexray::transport::method::Method::Bdpt,
-        faults,
-    )))
-}
-
-#[test]
-fn mirror_corridor_matches_the_series_with_bdpt_on_the_cpu() {
-    bdpt_cpu(Faults::NONE).assert_agrees("CPU BDPT mirror corridor");
-}
-
-#[test]
-fn mirror_corridor_matches_the_series_with_bdpt_on_the_gpu() {
-    let Some(r) = bdpt_gpu(Faults::NONE) else {
-        return;
-    };
-    r.assert_agrees("GPU BDPT mirror corridor");
-}
-
-#[test]
-fn mirror_corridor_rejects_a_depth_cap_with_bdpt_on_the_cpu() {
-    bdpt_cpu(DEPTH_CAP).assert_rejected_as_too_dark("CPU BDPT mirror corridor, depth cap 8");
-}
-
-#[test]
-fn mirror_corridor_rejects_a_depth_cap_with_bdpt_on_the_gpu() {
-    let Some(r) = bdpt_gpu(DEPTH_CAP) else {
-        return;
-    };
-    r.assert_rejected_as_too_dark("GPU BDPT mirror corridor, depth cap 8");
+    fn mirror_corridor_rejects_a_depth_cap_with_bdpt(backend) {
+        let r = report(backend, Method::Bdpt, DEPTH_CAP);
+        r.assert_rejected_as_too_dark(&format!("{backend} BDPT mirror corridor, depth cap 8"));
+    }
 }

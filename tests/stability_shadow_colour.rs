@@ -40,7 +40,7 @@ use hexray::scene::{MaterialDesc, Scene};
 use hexray::transport::camera::Camera;
 use hexray::transport::faults::Faults;
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 const VIEW: &str = "scenes/stability/tncg15_umbra_view.json";
 const SIZE: u32 = 64;
@@ -446,18 +446,24 @@ fn hue_z(render: &Film) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     (against_expected, irradiance_vs_grey)
 }
 
-fn render_cpu_view(seed: u32, faults: Faults) -> Film {
-    render_cpu(VIEW, SIZE, SIZE, SPP, seed, faults)
-}
-
-fn cpu_view() -> &'static Film {
-    static FILM: OnceLock<Film> = OnceLock::new();
-    FILM.get_or_init(|| render_cpu_view(51, Faults::NONE))
-}
-
-fn cpu_grey_view() -> &'static Film {
-    static FILM: OnceLock<Film> = OnceLock::new();
-    FILM.get_or_init(|| render_cpu_view(52, GREY))
+/// The umbra view on `backend`, correct or with grey indirect light (seeds 51 and 52 on the
+/// CPU, where it is rendered once for all tests; 53 and 54 on the GPU).
+fn view(backend: Backend, faults: Faults) -> Arc<Film> {
+    let seed = match (backend, faults == GREY) {
+        (Backend::Cpu, false) => 51,
+        (Backend::Cpu, true) => 52,
+        (Backend::Gpu, false) => 53,
+        (Backend::Gpu, true) => 54,
+    };
+    let render = Render::file(VIEW)
+        .size(SIZE, SIZE)
+        .spp(SPP)
+        .seed(seed)
+        .faults(faults);
+    match backend {
+        Backend::Cpu => render.cpu_shared(),
+        Backend::Gpu => Arc::new(render.gpu()),
+    }
 }
 
 fn assert_radiance_matches(render: &Film, what: &str) {
@@ -476,14 +482,32 @@ fn radiance_rejected(render: &Film) -> bool {
         .any(|z| z.iter().any(|z| z.abs() > 4.0))
 }
 
-#[test]
-fn cpu_umbra_radiance_is_albedo_times_gathered_irradiance() {
-    assert_radiance_matches(cpu_view(), "CPU");
+on_each_backend! {
+    fn umbra_radiance_is_albedo_times_gathered_irradiance(backend) {
+        assert_radiance_matches(&view(backend, Faults::NONE), &backend.to_string());
+    }
+
+    /// Power: a renderer whose light after the first diffuse bounce is grey fails both
+    /// statements (the hue statement is tested on the CPU only).
+    fn umbra_tests_reject_grey_indirect_light(backend) {
+        let grey = view(backend, GREY);
+        assert!(
+            radiance_rejected(&grey),
+            "{backend}: grey indirect light passed the radiance test"
+        );
+        if backend == Backend::Cpu {
+            let (z, _) = hue_z(&grey);
+            assert!(
+                z.iter().any(|z| z.iter().any(|z| z.abs() > 4.0)),
+                "grey indirect light passed the hue test: {z:?}"
+            );
+        }
+    }
 }
 
 #[test]
 fn cpu_umbra_hue_is_albedo_hue_times_irradiance_hue() {
-    let (z, e_vs_grey) = hue_z(cpu_view());
+    let (z, e_vs_grey) = hue_z(&view(Backend::Cpu, Faults::NONE));
     // The statement has content: the cyan face's indirect light is measurably coloured.
     assert!(
         e_vs_grey[0].iter().all(|z| z.abs() > 4.0),
@@ -497,40 +521,4 @@ fn cpu_umbra_hue_is_albedo_hue_times_irradiance_hue() {
             REGIONS[r]
         );
     }
-}
-
-#[test]
-fn gpu_umbra_radiance_is_albedo_times_gathered_irradiance() {
-    let Some(gpu) = gpu() else {
-        return;
-    };
-    let film = render_gpu(gpu, VIEW, SIZE, SIZE, SPP, 53, Faults::NONE);
-    assert_radiance_matches(&film, "GPU");
-}
-
-/// Power: a CPU renderer whose light after the first diffuse bounce is grey fails both
-/// statements.
-#[test]
-fn umbra_tests_reject_grey_indirect_light() {
-    assert!(
-        radiance_rejected(cpu_grey_view()),
-        "grey indirect light passed the radiance test"
-    );
-    let (z, _) = hue_z(cpu_grey_view());
-    assert!(
-        z.iter().any(|z| z.iter().any(|z| z.abs() > 4.0)),
-        "grey indirect light passed the hue test: {z:?}"
-    );
-}
-
-#[test]
-fn gpu_umbra_test_rejects_grey_indirect_light() {
-    let Some(gpu) = gpu() else {
-        return;
-    };
-    let film = render_gpu(gpu, VIEW, SIZE, SIZE, SPP, 54, GREY);
-    assert!(
-        radiance_rejected(&film),
-        "grey indirect light on the GPU passed the radiance test"
-    );
 }

@@ -17,7 +17,6 @@
 
 use crate::common::*;
 use hexray::accel::bvh::intersect_closest;
-use hexray::film::Film;
 use hexray::layout::FlatScene;
 use hexray::scene::{MaterialDesc, Scene, SceneDesc, SphereDesc};
 use hexray::transport::camera::Camera;
@@ -86,21 +85,28 @@ fn assert_every_ray_is_tangent(scene: &Scene) {
     }
 }
 
-fn dropped_per_method(render: &dyn Fn(&Scene, Method, u32) -> Film) -> Vec<(Method, u64)> {
+/// The dropped samples of each method on `backend`, seeds 90, 91, 92.
+fn dropped_per_method(backend: Backend, faults: Faults) -> Vec<(Method, u64)> {
     let scene = scene();
     assert_every_ray_is_tangent(&scene);
     [Method::Bdpt, Method::Vcm, Method::Sppm]
         .into_iter()
         .enumerate()
         .map(|(i, method)| {
-            let film = render(&scene, method, 90 + i as u32);
+            let film = Render::scene(&scene)
+                .size(SIZE, SIZE)
+                .spp(ITERATIONS)
+                .seed(90 + i as u32)
+                .method(method)
+                .faults(faults)
+                .on(backend);
             assert_eq!(film.spp(), ITERATIONS as u64, "{method:?}");
             (method, film.dropped())
         })
         .collect()
 }
 
-fn assert_all_finite(backend: &str, dropped: &[(Method, u64)]) {
+fn assert_all_finite(backend: Backend, dropped: &[(Method, u64)]) {
     eprintln!("{backend}: dropped samples per method {dropped:?}");
     assert!(
         dropped.iter().all(|&(_, n)| n == 0),
@@ -112,7 +118,7 @@ fn assert_all_finite(backend: &str, dropped: &[(Method, u64)]) {
 /// (Its rays, going down by 1e-30, reflect off the sphere onto the emitting wall, whose
 /// emission is weighed with the NaN quantities; the upper half's rays, going up by 1e-30, come
 /// to nothing with or without the fault, and sppm, whose weights are 1, never reads them.)
-fn assert_connecting_samples_dropped(backend: &str, dropped: &[(Method, u64)]) {
+fn assert_connecting_samples_dropped(backend: Backend, dropped: &[(Method, u64)]) {
     eprintln!("{backend}, subpaths continued past the tangent hit: dropped {dropped:?}");
     let lower_half = (SIZE * SIZE / 2 * ITERATIONS) as u64;
     for &(method, n) in dropped {
@@ -125,39 +131,12 @@ fn assert_connecting_samples_dropped(backend: &str, dropped: &[(Method, u64)]) {
     }
 }
 
-fn cpu(faults: Faults) -> Vec<(Method, u64)> {
-    dropped_per_method(&|scene, method, seed| {
-        render_cpu_scene_method(scene, SIZE, SIZE, ITERATIONS, seed, method, faults)
-    })
-}
-
-fn gpu_run(faults: Faults) -> Option<Vec<(Method, u64)>> {
-    let gpu = gpu()?;
-    Some(dropped_per_method(&|scene, method, seed| {
-        render_gpu_scene_method(gpu, scene, SIZE, SIZE, ITERATIONS, seed, method, faults)
-    }))
-}
-
-#[test]
-fn subpaths_tangent_to_a_mirror_sphere_give_finite_samples() {
-    assert_all_finite("CPU", &cpu(Faults::NONE));
-}
-
-#[test]
-fn subpaths_continued_past_a_tangent_hit_are_rejected() {
-    assert_connecting_samples_dropped("CPU", &cpu(CONTINUE));
-}
-
-#[test]
-fn gpu_subpaths_tangent_to_a_mirror_sphere_give_finite_samples() {
-    if let Some(dropped) = gpu_run(Faults::NONE) {
-        assert_all_finite("GPU", &dropped);
+on_each_backend! {
+    fn subpaths_tangent_to_a_mirror_sphere_give_finite_samples(backend) {
+        assert_all_finite(backend, &dropped_per_method(backend, Faults::NONE));
     }
-}
 
-#[test]
-fn gpu_subpaths_continued_past_a_tangent_hit_are_rejected() {
-    if let Some(dropped) = gpu_run(CONTINUE) {
-        assert_connecting_samples_dropped("GPU", &dropped);
+    fn subpaths_continued_past_a_tangent_hit_are_rejected(backend) {
+        assert_connecting_samples_dropped(backend, &dropped_per_method(backend, CONTINUE));
     }
 }

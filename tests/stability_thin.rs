@@ -47,9 +47,9 @@
 //! slab of index 1.55 instead of 1.5 (T 1.3 % lower at normal incidence), are rejected.
 
 use crate::common::*;
-use hexray::film::Film;
 use hexray::scene::{CameraDesc, MaterialDesc, Scene, SceneDesc};
 use hexray::transport::faults::Faults;
+use hexray::transport::method::Method;
 
 const BOX: &str = "scenes/stability/thin_box.json";
 const BOX_GAP: &str = "scenes/stability/thin_box_gap.json";
@@ -69,29 +69,29 @@ fn edge_view(d: &mut SceneDesc) {
     };
 }
 
-/// Both views of a box scene, rendered by `render`: per view, the pixels that took light and the
-/// non-finite samples.
-fn box_views(rel: &str, render: &dyn Fn(&Scene) -> Film) -> [(usize, u64); 2] {
+/// Both views of a box scene, rendered on `backend`: per view, the pixels that took light and
+/// the non-finite samples.
+fn box_views(backend: Backend, rel: &str, spp: u32, seed: u32) -> [(usize, u64); 2] {
     [load_changed(rel, |_| {}), load_changed(rel, edge_view)].map(|s| {
-        let film = render(&s);
+        let film = Render::scene(&s)
+            .size(SIZE, SIZE)
+            .spp(spp)
+            .seed(seed)
+            .on(backend);
         (lit_pixels(&film).len(), film.dropped())
     })
 }
 
-fn cpu_box(rel: &str) -> [(usize, u64); 2] {
-    box_views(rel, &|s| {
-        render_cpu_scene(s, SIZE, SIZE, SPP, 50, Faults::NONE)
-    })
+/// [`box_views`] at [`SPP`], seed 50 on the CPU, 51 on the GPU.
+fn box_of(backend: Backend, rel: &str) -> [(usize, u64); 2] {
+    let seed = match backend {
+        Backend::Cpu => 50,
+        Backend::Gpu => 51,
+    };
+    box_views(backend, rel, SPP, seed)
 }
 
-fn gpu_box(rel: &str) -> Option<[(usize, u64); 2]> {
-    let gpu = gpu()?;
-    Some(box_views(rel, &|s| {
-        render_gpu_scene(gpu, s, SIZE, SIZE, SPP, 51, Faults::NONE)
-    }))
-}
-
-fn assert_dark(backend: &str, views: [(usize, u64); 2]) {
+fn assert_dark(backend: impl std::fmt::Display, views: [(usize, u64); 2]) {
     eprintln!(
         "{backend} closed box: lit pixels (corner view, edge view) {} {}, dropped {} {}",
         views[0].0, views[1].0, views[0].1, views[1].1
@@ -108,15 +108,10 @@ fn assert_dark(backend: &str, views: [(usize, u64); 2]) {
     }
 }
 
-#[test]
-fn thin_closed_box_is_black_inside_on_the_cpu() {
-    assert_dark("CPU", cpu_box(BOX));
-}
-
-#[test]
-fn thin_closed_box_is_black_inside_on_the_gpu() {
-    let Some(views) = gpu_box(BOX) else { return };
-    assert_dark("GPU", views);
+on_each_backend! {
+    fn thin_closed_box_is_black_inside(backend) {
+        assert_dark(backend, box_of(backend, BOX));
+    }
 }
 
 /// The same property at 4096 spp (16.8 M samples per view), where the leaks described in the
@@ -125,39 +120,24 @@ fn thin_closed_box_is_black_inside_on_the_gpu() {
 #[ignore = "fails: 2 of 33.6 M samples leak, 1 + 1 pixels in the two views (presumably \
             shared-diagonal cracks of Möller–Trumbore, see the file header); 30 s"]
 fn thin_closed_box_is_black_inside_at_16_million_samples() {
-    let views = box_views(BOX, &|s| {
-        render_cpu_scene(s, SIZE, SIZE, 4096, 54, Faults::NONE)
-    });
+    let views = box_views(Backend::Cpu, BOX, 4096, 54);
     assert_dark("CPU at 4096 spp", views);
 }
 
-/// Power: with the walls 1e-4 short of the bottom face the same test sees the floor's light.
-#[test]
-fn thin_box_test_rejects_a_1e4_slit_on_the_cpu() {
-    let views = cpu_box(BOX_GAP);
-    eprintln!(
-        "CPU box with a slit: lit pixels {} {}",
-        views[0].0, views[1].0
-    );
-    assert!(
-        views.iter().map(|v| v.0).sum::<usize>() > 0,
-        "a 1e-4 slit went unnoticed"
-    );
-}
-
-#[test]
-fn thin_box_test_rejects_a_1e4_slit_on_the_gpu() {
-    let Some(views) = gpu_box(BOX_GAP) else {
-        return;
-    };
-    eprintln!(
-        "GPU box with a slit: lit pixels {} {}",
-        views[0].0, views[1].0
-    );
-    assert!(
-        views.iter().map(|v| v.0).sum::<usize>() > 0,
-        "a 1e-4 slit went unnoticed"
-    );
+on_each_backend! {
+    /// Power: with the walls 1e-4 short of the bottom face the same test sees the floor's
+    /// light.
+    fn thin_box_test_rejects_a_1e4_slit(backend) {
+        let views = box_of(backend, BOX_GAP);
+        eprintln!(
+            "{backend} box with a slit: lit pixels {} {}",
+            views[0].0, views[1].0
+        );
+        assert!(
+            views.iter().map(|v| v.0).sum::<usize>() > 0,
+            "{backend}: a 1e-4 slit went unnoticed"
+        );
+    }
 }
 
 /// Unpolarised Fresnel reflectance of a smooth boundary from air into index `n` at incidence
@@ -254,27 +234,31 @@ fn slab_blocks(x: u32, y: u32) -> Option<usize> {
     Some(((y / 8) * (SIZE / 8) + x / 8) as usize)
 }
 
-/// The slab as rendered by `render` (possibly with a changed scene) against the exact image of
-/// the committed scene.
-fn slab_report(
+/// The slab rendered with `method` on `backend` (possibly with a changed scene) against the
+/// exact image of the committed scene. Path tracing: seed 52 on the CPU, 53 on the GPU; BDPT:
+/// 56 and 57.
+fn slab(
+    backend: Backend,
+    method: Method,
     change: impl FnOnce(&mut SceneDesc),
-    film: impl FnOnce(&Scene) -> Film,
+    faults: Faults,
 ) -> TruthReport {
+    let seed = match (method, backend) {
+        (Method::Bdpt, Backend::Cpu) => 56,
+        (Method::Bdpt, Backend::Gpu) => 57,
+        (_, Backend::Cpu) => 52,
+        (_, Backend::Gpu) => 53,
+    };
     let (scene, _) = load(SLAB);
     let exact = slab_exact(&scene, SIZE, SIZE);
-    let rendered = film(&load_changed(SLAB, change));
+    let rendered = Render::scene(&load_changed(SLAB, change))
+        .size(SIZE, SIZE)
+        .spp(SPP)
+        .seed(seed)
+        .method(method)
+        .faults(faults)
+        .on(backend);
     against_truth(&rendered, &exact, slab_blocks, 0.01)
-}
-
-fn cpu_slab(change: impl FnOnce(&mut SceneDesc), faults: Faults) -> TruthReport {
-    slab_report(change, |s| render_cpu_scene(s, SIZE, SIZE, SPP, 52, faults))
-}
-
-fn gpu_slab(change: impl FnOnce(&mut SceneDesc), faults: Faults) -> Option<TruthReport> {
-    let gpu = gpu()?;
-    Some(slab_report(change, |s| {
-        render_gpu_scene(gpu, s, SIZE, SIZE, SPP, 53, faults)
-    }))
 }
 
 const DIM_GLASS: Faults = Faults {
@@ -312,79 +296,28 @@ fn thin_slab_fresnel_and_quadrature_match_closed_forms() {
     }
 }
 
-#[test]
-fn thin_slab_transmits_the_fresnel_series_on_the_cpu() {
-    let r = cpu_slab(|_| {}, Faults::NONE);
-    r.assert_agrees("CPU glass slab 1e-4");
-}
+on_each_backend! {
+    fn thin_slab_transmits_the_fresnel_series(backend) {
+        let r = slab(backend, Method::Path, |_| {}, Faults::NONE);
+        r.assert_agrees(&format!("{backend} glass slab 1e-4"));
+    }
 
-#[test]
-fn thin_slab_transmits_the_fresnel_series_on_the_gpu() {
-    let Some(r) = gpu_slab(|_| {}, Faults::NONE) else {
-        return;
-    };
-    r.assert_agrees("GPU glass slab 1e-4");
+    fn thin_slab_rejects_a_wrong_index(backend) {
+        let r = slab(backend, Method::Path, ior_1_55, Faults::NONE);
+        r.assert_rejected_as_too_dark(&format!("{backend} glass slab of index 1.55"));
+    }
+
+    /// BDPT through the thin slab: light subpaths refract through it in importance transport
+    /// (no 1/η² scaling) and are never connected at its specular vertices, camera subpaths
+    /// carry the η² scaling; the blocks must match the same Fresnel series on both backends.
+    fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt(backend) {
+        let r = slab(backend, Method::Bdpt, |_| {}, Faults::NONE);
+        r.assert_agrees(&format!("{backend} BDPT thin slab"));
+    }
 }
 
 #[test]
 fn thin_slab_rejects_a_dim_glass_on_the_cpu() {
-    let r = cpu_slab(|_| {}, DIM_GLASS);
+    let r = slab(Backend::Cpu, Method::Path, |_| {}, DIM_GLASS);
     r.assert_rejected_as_too_dark("CPU glass slab, 0.97 per refraction");
-}
-
-#[test]
-fn thin_slab_rejects_a_wrong_index_on_the_cpu() {
-    let r = cpu_slab(ior_1_55, Faults::NONE);
-    r.assert_rejected_as_too_dark("CPU glass slab of index 1.55");
-}
-
-#[test]
-fn thin_slab_rejects_a_wrong_index_on_the_gpu() {
-    let Some(r) = gpu_slab(ior_1_55, Faults::NONE) else {
-        return;
-    };
-    r.assert_rejected_as_too_dark("GPU glass slab of index 1.55");
-}
-
-/// BDPT through the thin slab: light subpaths refract through it in importance transport (no
-/// 1/η² scaling) and are never connected at its specular vertices, camera subpaths carry the η²
-/// scaling; the blocks must match the same Fresnel series on both backends.
-#[test]
-fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_cpu() {
-    let r = slab_report(
-        |_| {},
-        |s| {
-            render_cpu_scene_method(
-                s,
-                SIZE,
-                SIZE,
-                SPP,
-                56,
-                hexray::transport::method::Method::Bdpt,
-                Faults::NONE,
-            )
-        },
-    );
-    r.assert_agrees("CPU BDPT thin slab");
-}
-
-#[test]
-fn thin_glass_slab_transmits_the_fresnel_series_with_bdpt_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    let r = slab_report(
-        |_| {},
-        |s| {
-            render_gpu_scene_method(
-                gpu,
-                s,
-                SIZE,
-                SIZE,
-                SPP,
-                57,
-                hexray::transport::method::Method::Bdpt,
-                Faults::NONE,
-            )
-        },
-    );
-    r.assert_agrees("GPU BDPT thin slab");
 }

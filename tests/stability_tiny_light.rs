@@ -30,22 +30,23 @@ use rayon::prelude::*;
 const SCENE: &str = "scenes/stability/tiny_light_1e2.json";
 const REFERENCE: &str = "tests/data/references/stability/tiny_light_1e2_32.exr";
 
-#[test]
-fn light_100_times_smaller_is_unbiased_on_the_cpu() {
-    let film = render_cpu(SCENE, 32, 32, 4096, 41, Faults::NONE);
-    assert_eq!(film.dropped(), 0, "non-finite samples");
-    let z = film_mean_z("tiny light 1e2, CPU", &film, REFERENCE);
-    assert!(means_agree(z), "z {z:?}");
-}
-
-/// The GPU renders 16x16 pixels (lavapipe is slow): the same image mean, from 1 million samples.
-#[test]
-fn light_100_times_smaller_is_unbiased_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    let film = render_gpu(gpu, SCENE, 16, 16, 4096, 42, Faults::NONE);
-    assert_eq!(film.dropped(), 0, "non-finite samples");
-    let z = film_mean_z("tiny light 1e2, GPU", &film, REFERENCE);
-    assert!(means_agree(z), "z {z:?}");
+on_each_backend! {
+    /// 4096 samples per pixel: on the CPU 32x32 (seed 41); on the GPU 16x16 (lavapipe is slow;
+    /// seed 42), the same image mean from 1 million samples.
+    fn light_100_times_smaller_is_unbiased(backend) {
+        let (size, seed) = match backend {
+            Backend::Cpu => (32, 41),
+            Backend::Gpu => (16, 42),
+        };
+        let film = Render::file(SCENE)
+            .size(size, size)
+            .spp(4096)
+            .seed(seed)
+            .on(backend);
+        assert_eq!(film.dropped(), 0, "{backend}: non-finite samples");
+        let z = film_mean_z(&format!("tiny light 1e2, {backend}"), &film, REFERENCE);
+        assert!(means_agree(z), "{backend}: z {z:?}");
+    }
 }
 
 /// A renderer that clamps every sample to at most `clamp` per channel: the CPU integrator's
@@ -80,24 +81,27 @@ fn tiny_light_test_rejects_a_renderer_that_clamps_fireflies() {
 const SCENE_1E4: &str = "scenes/stability/tiny_light_1e4.json";
 const REFERENCE_1E4: &str = "tests/data/references/stability/tiny_light_1e4_32.exr";
 
-/// The light shrunk 10^4-fold, as far as a test's budget can see it: both backends render it
-/// without a non-finite sample and without a negative pixel (its unbiasedness is the ignored
-/// test below and docs/stability.md's expected error).
-#[test]
-fn light_10000_times_smaller_renders_finite_on_both_backends() {
-    let cpu = render_cpu(SCENE_1E4, 16, 16, 256, 43, Faults::NONE);
-    assert_eq!(cpu.dropped(), 0, "CPU: non-finite samples");
-    assert!(cpu
-        .pixels
-        .iter()
-        .all(|p| p.mean().iter().all(|&m| m >= 0.0)));
-    let Some(gpu) = gpu() else { return };
-    let film = render_gpu(gpu, SCENE_1E4, 16, 16, 256, 44, Faults::NONE);
-    assert_eq!(film.dropped(), 0, "GPU: non-finite samples");
-    assert!(film
-        .pixels
-        .iter()
-        .all(|p| p.mean().iter().all(|&m| m >= 0.0)));
+on_each_backend! {
+    /// The light shrunk 10^4-fold, as far as a test's budget can see it: each backend renders
+    /// it without a non-finite sample and without a negative pixel (its unbiasedness is the
+    /// ignored test below and docs/stability.md's expected error). 16x16, 256 spp, seed 43 on
+    /// the CPU, 44 on the GPU.
+    fn light_10000_times_smaller_renders_finite(backend) {
+        let seed = match backend {
+            Backend::Cpu => 43,
+            Backend::Gpu => 44,
+        };
+        let film = Render::file(SCENE_1E4)
+            .size(16, 16)
+            .spp(256)
+            .seed(seed)
+            .on(backend);
+        assert_eq!(film.dropped(), 0, "{backend}: non-finite samples");
+        assert!(film
+            .pixels
+            .iter()
+            .all(|p| p.mean().iter().all(|&m| m >= 0.0)));
+    }
 }
 
 /// The light shrunk 10^4-fold is unbiased: a render as long as the reference (32x32, 262144
@@ -106,7 +110,11 @@ fn light_10000_times_smaller_renders_finite_on_both_backends() {
 #[test]
 #[ignore = "268 million paths: minutes on 2 cores"]
 fn light_10000_times_smaller_is_unbiased_on_the_cpu() {
-    let film = render_cpu(SCENE_1E4, 32, 32, 262_144, 45, Faults::NONE);
+    let film = Render::file(SCENE_1E4)
+        .size(32, 32)
+        .spp(262_144)
+        .seed(45)
+        .cpu();
     assert_eq!(film.dropped(), 0, "non-finite samples");
     let z = film_mean_z("tiny light 1e4, CPU", &film, REFERENCE_1E4);
     assert!(means_agree(z), "z {z:?}");

@@ -16,7 +16,6 @@
 
 use crate::common::*;
 use hexray::film::Film;
-use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -54,7 +53,11 @@ fn pixel_independent_variance(film: &Film) -> f64 {
 fn film_standard_error_matches_the_scatter_across_seeds() {
     let renders: Vec<(f64, f64)> = (100..200)
         .map(|seed| {
-            let film = render_cpu("scenes/cornell_box.json", 16, 16, 16, seed, Faults::NONE);
+            let film = Render::file("scenes/cornell_box.json")
+                .size(16, 16)
+                .spp(16)
+                .seed(seed)
+                .cpu();
             let (m, se) = film.image_mean();
             (m[0], se[0] * se[0])
         })
@@ -81,15 +84,12 @@ fn films(method: Method) -> &'static [Film] {
     cell.get_or_init(|| {
         (300..700)
             .map(|seed| {
-                render_cpu_method(
-                    "scenes/cornell_box.json",
-                    16,
-                    16,
-                    32,
-                    seed,
-                    method,
-                    Faults::NONE,
-                )
+                Render::file("scenes/cornell_box.json")
+                    .size(16, 16)
+                    .spp(32)
+                    .seed(seed)
+                    .method(method)
+                    .cpu()
             })
             .collect()
     })

@@ -13,38 +13,49 @@
 
 use crate::common::parity::parity;
 use crate::common::*;
+use hexray::film::Film;
 use hexray::transport::faults::Faults;
 
 const ROOM: &str = "scenes/tncg15_room.json";
 const TESSELLATED: &str = "scenes/perf/tncg15_room_x100.json";
 
-#[test]
-fn tessellated_room_renders_the_room_on_the_cpu() {
-    let room = render_cpu(ROOM, 32, 32, 1024, 61, Faults::NONE);
-    let fine = render_cpu(TESSELLATED, 32, 32, 1024, 62, Faults::NONE);
-    let p = parity(&room, &fine);
-    eprintln!("x100 vs room, CPU: {p}");
-    assert!(p.same(), "{p}");
+fn room(seed: u32) -> Film {
+    Render::file(ROOM).size(32, 32).spp(1024).seed(seed).cpu()
 }
 
-#[test]
-fn tessellated_room_renders_the_room_on_the_gpu() {
-    let Some(gpu) = gpu() else { return };
-    let room = render_cpu(ROOM, 32, 32, 1024, 63, Faults::NONE);
-    let fine = render_gpu(gpu, TESSELLATED, 32, 32, 256, 64, Faults::NONE);
-    let p = parity(&room, &fine);
-    eprintln!("x100 on the GPU vs room on the CPU: {p}");
-    assert!(p.same(), "{p}");
+on_each_backend! {
+    /// The tessellated room on `backend` against the room on the CPU (1024 spp, seed 61),
+    /// at 1024 spp with seed 62 on the CPU, 256 with seed 64 on the GPU (the room then seed 63).
+    fn tessellated_room_renders_the_room(backend) {
+        let (room_seed, spp, seed) = match backend {
+            Backend::Cpu => (61, 1024, 62),
+            Backend::Gpu => (63, 256, 64),
+        };
+        let room = room(room_seed);
+        let fine = Render::file(TESSELLATED)
+            .size(32, 32)
+            .spp(spp)
+            .seed(seed)
+            .on(backend);
+        let p = parity(&room, &fine);
+        eprintln!("x100 on the {backend} vs room on the CPU: {p}");
+        assert!(p.same(), "{p}");
+    }
 }
 
 #[test]
 fn tessellation_test_rejects_mirrors_3_percent_too_dark() {
-    let room = render_cpu(ROOM, 32, 32, 1024, 61, Faults::NONE);
+    let room = room(61);
     let dim = Faults {
         specular_scale: 0.97,
         ..Faults::NONE
     };
-    let fine = render_cpu(TESSELLATED, 32, 32, 1024, 62, dim);
+    let fine = Render::file(TESSELLATED)
+        .size(32, 32)
+        .spp(1024)
+        .seed(62)
+        .faults(dim)
+        .cpu();
     let p = parity(&room, &fine);
     eprintln!("x100 with dim mirrors vs room, CPU: {p}");
     assert!(!p.same(), "dim mirrors passed: {p}");

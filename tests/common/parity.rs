@@ -1,13 +1,11 @@
-//! The parity statistic of `tests/gpu_parity.rs` for any two films, and renders that several
-//! stability tests compare against, rendered once per test binary.
+//! The parity statistic of `tests/gpu_parity.rs` for any two films.
 
+use super::{Backend, Render};
 use glam::Vec3;
 use hexray::analysis::stats::{welch_blocks, MeanImage};
 use hexray::film::Film;
 use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
 
 /// Two images compared per 8x8 block and channel (Welch's t, Bonferroni α = 0.01 over all
 /// block-channels) and by their image-mean ratio b / a per channel with its standard error.
@@ -86,10 +84,18 @@ pub fn gpu_against_cpu_iterations(
     radius: hexray::transport::merging::MergeRadius,
     gpu_faults: Faults,
 ) -> Option<Parity> {
-    let gpu = super::gpu()?;
-    let (w, n) = (size, iterations);
-    let a = super::render_cpu_iterations(rel, w, w, n, 80, method, radius, Faults::NONE);
-    let b = super::render_gpu_iterations(gpu, rel, w, w, n, 81, method, radius, gpu_faults);
+    super::gpu()?;
+    let n = iterations;
+    let render = Render::file(rel)
+        .size(size, size)
+        .spp(n)
+        .method(method)
+        .radius(radius);
+    let a = render.seed(80).iterations_on(Backend::Cpu);
+    let b = render
+        .seed(81)
+        .faults(gpu_faults)
+        .iterations_on(Backend::Gpu);
     let p = parity_of_iterations(&a, &b);
     eprintln!("{method} {rel}, {n} iterations, GPU against CPU, batch means: {p}");
     Some(p)
@@ -138,55 +144,4 @@ fn compare(
         ratio_se,
         ratio_z: [0, 1, 2].map(|c| (ratio[c] - 1.0) / ratio_se[c]),
     }
-}
-
-type Key = (String, u32, u32, u32, u32, String);
-type Cache = Mutex<HashMap<Key, Arc<OnceLock<Arc<Film>>>>>;
-
-/// [`super::render_cpu`], rendered once per test binary for each distinct argument list: the
-/// first test that asks renders it, the others wait for it and share the film.
-pub fn render_cpu_shared(
-    rel: &str,
-    width: u32,
-    height: u32,
-    spp: u32,
-    seed: u32,
-    faults: Faults,
-) -> Arc<Film> {
-    render_cpu_method_shared(rel, width, height, spp, seed, Method::Path, faults)
-}
-
-/// [`super::render_cpu_method`], shared as [`render_cpu_shared`] is: a render that several
-/// tests compare against (their planted faults on the other side) is rendered once.
-pub fn render_cpu_method_shared(
-    rel: &str,
-    width: u32,
-    height: u32,
-    spp: u32,
-    seed: u32,
-    method: Method,
-    faults: Faults,
-) -> Arc<Film> {
-    static CACHE: OnceLock<Cache> = OnceLock::new();
-    let key = (
-        rel.to_string(),
-        width,
-        height,
-        spp,
-        seed,
-        format!("{method:?} {faults:?}"),
-    );
-    let cell = CACHE
-        .get_or_init(Default::default)
-        .lock()
-        .unwrap()
-        .entry(key)
-        .or_default()
-        .clone();
-    cell.get_or_init(|| {
-        Arc::new(super::render_cpu_method(
-            rel, width, height, spp, seed, method, faults,
-        ))
-    })
-    .clone()
 }

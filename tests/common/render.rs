@@ -1,0 +1,335 @@
+//! One way to render in a test, on either backend: the [`Render`] builder, with named options
+//! and the defaults below, and [`on_each_backend!`], which runs one test body on each backend.
+//!
+//! ```ignore
+//! let film = Render::file("scenes/cornell_box.json").size(64, 64).spp(16).seed(3).on(backend);
+//! ```
+
+use super::{load, repo};
+use hexray::cpu::shadow_probe::shadow_threshold_for;
+use hexray::cpu::{render_iterations, render_pass, LightPassBuffers};
+use hexray::film::Film;
+use hexray::gpu::{Checks, GpuRenderer, Residency};
+use hexray::layout::FlatScene;
+use hexray::scene::Scene;
+use hexray::transport::camera::Camera;
+use hexray::transport::faults::Faults;
+use hexray::transport::merging::MergeRadius;
+use hexray::transport::method::Method;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// The backend a test body runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    Cpu,
+    Gpu,
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Backend::Cpu => "CPU",
+            Backend::Gpu => "GPU",
+        })
+    }
+}
+
+/// What is rendered: a scene file, or a loaded (possibly changed) scene.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    File(&'a str),
+    Scene(&'a Scene),
+}
+
+/// A render of a scene, seen by its camera. Defaults: 32x32, 1 sample (or iteration), seed 0,
+/// path tracing, one shadow ray per diffuse vertex, no planted fault, the scene's default merge
+/// radius schedule. The CPU renders on all cores; the GPU with the kernel and residency the CLI
+/// uses and no runtime checks.
+#[derive(Clone, Copy)]
+pub struct Render<'a> {
+    source: Source<'a>,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    method: Method,
+    light_samples: u32,
+    faults: Faults,
+    radius: Option<MergeRadius>,
+}
+
+impl<'a> Render<'a> {
+    /// A render of the scene file `rel` (a path under the repository root).
+    pub fn file(rel: &'a str) -> Self {
+        Self::of(Source::File(rel))
+    }
+
+    /// A render of a loaded (possibly changed, see [`super::load_changed`]) scene.
+    pub fn scene(scene: &'a Scene) -> Self {
+        Self::of(Source::Scene(scene))
+    }
+
+    fn of(source: Source<'a>) -> Self {
+        Render {
+            source,
+            width: 32,
+            height: 32,
+            spp: 1,
+            seed: 0,
+            method: Method::Path,
+            light_samples: 1,
+            faults: Faults::NONE,
+            radius: None,
+        }
+    }
+
+    pub fn size(self, width: u32, height: u32) -> Self {
+        Render {
+            width,
+            height,
+            ..self
+        }
+    }
+
+    /// Samples per pixel of path tracing; iterations of the methods with light subpaths.
+    pub fn spp(self, spp: u32) -> Self {
+        Render { spp, ..self }
+    }
+
+    pub fn seed(self, seed: u32) -> Self {
+        Render { seed, ..self }
+    }
+
+    pub fn method(self, method: Method) -> Self {
+        Render { method, ..self }
+    }
+
+    /// Shadow rays per diffuse vertex (path tracing).
+    pub fn light_samples(self, light_samples: u32) -> Self {
+        Render {
+            light_samples,
+            ..self
+        }
+    }
+
+    pub fn faults(self, faults: Faults) -> Self {
+        Render { faults, ..self }
+    }
+
+    /// The merge radius schedule of a merging method (sppm, vcm).
+    pub fn radius(self, radius: MergeRadius) -> Self {
+        Render {
+            radius: Some(radius),
+            ..self
+        }
+    }
+
+    fn loaded(&self) -> (std::borrow::Cow<'a, Scene>, FlatScene) {
+        match self.source {
+            Source::File(rel) => {
+                let (scene, flat) = load(rel);
+                (std::borrow::Cow::Owned(scene), flat)
+            }
+            Source::Scene(scene) => (std::borrow::Cow::Borrowed(scene), FlatScene::build(scene)),
+        }
+    }
+
+    fn camera(&self, scene: &Scene) -> Camera {
+        Camera::new(&scene.desc.camera, self.width, self.height)
+    }
+
+    /// The film on `backend`.
+    pub fn on(&self, backend: Backend) -> Film {
+        match backend {
+            Backend::Cpu => self.cpu(),
+            Backend::Gpu => self.gpu(),
+        }
+    }
+
+    /// The film on the CPU.
+    pub fn cpu(&self) -> Film {
+        let (scene, flat) = self.loaded();
+        let camera = self.camera(&scene);
+        let mut film = Film::new(self.width, self.height);
+        if self.method.splats() {
+            let radius = self
+                .radius
+                .unwrap_or_else(|| MergeRadius::default_for(&flat, self.method));
+            let mut buffers = LightPassBuffers::new(&flat, &camera, self.method, radius);
+            render_iterations(
+                &flat,
+                &camera,
+                self.seed,
+                0,
+                self.spp,
+                self.method,
+                self.faults,
+                &mut buffers,
+                &mut film,
+            );
+        } else {
+            render_pass(
+                &flat,
+                &camera,
+                self.seed,
+                0,
+                self.spp,
+                self.light_samples,
+                self.faults,
+                &mut film,
+            );
+        }
+        film
+    }
+
+    /// The film on the GPU (the test's [`super::gpu`], which must exist).
+    pub fn gpu(&self) -> Film {
+        let mut r = self.gpu_renderer();
+        r.set_light_samples(self.light_samples);
+        let mut film = Film::new(self.width, self.height);
+        r.render(0, self.spp, &mut film).unwrap();
+        film
+    }
+
+    /// A GPU renderer of the scene (with the merge radius schedule, if one is set), for tests
+    /// that drive it directly.
+    pub fn gpu_renderer(&self) -> GpuRenderer {
+        let gpu = super::gpu().expect("a GPU test runs only where common::gpu() gives one");
+        let (scene, flat) = self.loaded();
+        let camera = self.camera(&scene);
+        let mut r = GpuRenderer::new(
+            &gpu.device,
+            &gpu.queue,
+            &flat,
+            camera,
+            self.seed,
+            self.faults,
+            Checks::Unchecked,
+            Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
+            self.method,
+            shadow_threshold_for(self.method, &flat, &camera),
+        )
+        .unwrap();
+        if let Some(radius) = self.radius {
+            r.set_merge_radius(radius);
+        }
+        r
+    }
+
+    /// The films of iterations `0..spp` of one render of a method that splats or merges (light,
+    /// bdpt, sppm, vcm), each alone (iteration i with the seed's streams of iteration i and,
+    /// when merging, the schedule's radius r_i), so that each is one independent estimate of
+    /// every pixel: the batches of [`super::parity::parity_of_iterations`]. The GPU renders them
+    /// with one renderer, asked for one iteration at a time.
+    pub fn iterations_on(&self, backend: Backend) -> Vec<Film> {
+        let (w, h) = (self.width, self.height);
+        match backend {
+            Backend::Cpu => {
+                let (scene, flat) = self.loaded();
+                let camera = self.camera(&scene);
+                let radius = self
+                    .radius
+                    .unwrap_or_else(|| MergeRadius::default_for(&flat, self.method));
+                let mut buffers = LightPassBuffers::new(&flat, &camera, self.method, radius);
+                (0..self.spp)
+                    .map(|i| {
+                        let mut film = Film::new(w, h);
+                        render_iterations(
+                            &flat,
+                            &camera,
+                            self.seed,
+                            i,
+                            1,
+                            self.method,
+                            self.faults,
+                            &mut buffers,
+                            &mut film,
+                        );
+                        film
+                    })
+                    .collect()
+            }
+            Backend::Gpu => {
+                let mut r = self.gpu_renderer();
+                (0..self.spp)
+                    .map(|i| {
+                        let mut film = Film::new(w, h);
+                        r.render(i, 1, &mut film).unwrap();
+                        film
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    /// [`Render::cpu`] of a scene file, rendered once per test binary for each distinct render:
+    /// the first test that asks renders it, the others wait for it and share the film. A render
+    /// that several tests compare against (their planted faults on the other side) is rendered
+    /// once.
+    pub fn cpu_shared(&self) -> Arc<Film> {
+        type Cache = Mutex<HashMap<String, Arc<OnceLock<Arc<Film>>>>>;
+        static CACHE: OnceLock<Cache> = OnceLock::new();
+        let Source::File(rel) = self.source else {
+            panic!("cpu_shared renders scene files only");
+        };
+        let key = format!(
+            "{} {}x{} {} {} {:?} {} {:?} {:?}",
+            repo(rel).display(),
+            self.width,
+            self.height,
+            self.spp,
+            self.seed,
+            self.method,
+            self.light_samples,
+            self.faults,
+            self.radius
+        );
+        let cell = CACHE
+            .get_or_init(Default::default)
+            .lock()
+            .unwrap()
+            .entry(key)
+            .or_default()
+            .clone();
+        cell.get_or_init(|| Arc::new(self.cpu())).clone()
+    }
+}
+
+/// One test body run on each backend, as one test per backend: `name::cpu` and `name::gpu`.
+/// The GPU's test returns at once (a skip) where [`super::gpu`] gives no GPU; that prints why,
+/// and fails where `CI` is set.
+///
+/// ```ignore
+/// on_each_backend! {
+///     /// The property and its statistic.
+///     fn furnace_albedo_0_5_converges_to_1(backend) {
+///         furnace(backend, "scenes/furnace/diffuse_0_5.json");
+///     }
+/// }
+/// ```
+macro_rules! on_each_backend {
+    ($($(#[$attr:meta])* fn $name:ident($backend:ident) $body:block)*) => {$(
+        $(#[$attr])*
+        mod $name {
+            #[allow(unused_imports)]
+            use super::*;
+
+            fn body($backend: $crate::common::Backend) $body
+
+            #[test]
+            fn cpu() {
+                body($crate::common::Backend::Cpu);
+            }
+
+            #[test]
+            fn gpu() {
+                if $crate::common::gpu().is_none() {
+                    return;
+                }
+                body($crate::common::Backend::Gpu);
+            }
+        }
+    )*};
+}
+pub(crate) use on_each_backend;
