@@ -2,9 +2,11 @@
 //! (`Frame` in `shaders/scene.wgsl`), one pass's [`PixelSums`], the workgroup and pass sizes,
 //! and the word layout of the splat tallies (`shaders/splat.wgsl`).
 
-use crate::layout::PlanarMirror;
 use crate::layout::MAX_PLANAR_MIRRORS;
+use crate::layout::{FlatScene, PlanarMirror};
 use crate::transport::camera::Camera;
+use crate::transport::faults::Faults;
+use crate::transport::method::Method;
 use bytemuck::{Pod, Zeroable};
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
@@ -78,6 +80,75 @@ pub struct Frame {
     pub pad0: u32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
+}
+
+impl Frame {
+    /// The frame of a new renderer: the whole image as one tile and one film band, no samples
+    /// yet, the method's constants, τ, the planted faults and the scene's planar mirrors.
+    pub fn first(
+        scene: &FlatScene,
+        camera: Camera,
+        seed: u32,
+        faults: Faults,
+        method: Method,
+        shadow_threshold: f32,
+        vertex_capacity: u32,
+    ) -> Frame {
+        Frame {
+            camera,
+            seed,
+            first_sample: 0,
+            sample_count: 0,
+            num_emitters: scene.emitters.len() as u32,
+            tile_origin: [0, 0],
+            tile_size: [camera.width, camera.height],
+            max_bounces: faults.max_bounces,
+            specular_scale: faults.specular_scale,
+            light_samples: 1,
+            grey_indirect: faults.grey_indirect as u32,
+            method: match method {
+                Method::Path => 0,
+                Method::Light => 1,
+                Method::Bdpt => 2,
+                Method::Sppm => 3,
+                Method::Vcm => 4,
+                Method::VcmFull => 5,
+            },
+            n_light_paths: camera.width * camera.height,
+            slot: 0,
+            vertex_capacity,
+            path_origin: 0,
+            path_count: 0,
+            importance_missing_cos: faults.importance_missing_cos as u32,
+            shadow_threshold,
+            merge_vm: 0.0,
+            merge_vc: 0.0,
+            merge_normalization: 0.0,
+            film_row: 0,
+            film_rows: camera.height,
+            band_pixels: camera.width * camera.height,
+            wave_origin: 0,
+            continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
+            merge_rr_threshold: if matches!(method, Method::Vcm | Method::VcmFull) {
+                crate::transport::subpath::MERGE_RR_THRESHOLD
+            } else {
+                0.0
+            },
+            merge_rr_undivided: faults.merge_rr_undivided as u32,
+            planar_mirror_count: scene.planar_mirrors.len() as u32,
+            camera_goes_on: 1,
+            merge_radius: 0.0,
+            // Whether the method merges within the clearance; the iteration clears it where it
+            // does not merge (`Bidirectional`).
+            merges_within_clearance: (method.merges_within_clearance()
+                && !faults.merge_ignores_clearance) as u32,
+            clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
+            pad0: 0,
+            planar_mirrors: std::array::from_fn(|i| {
+                scene.planar_mirrors.get(i).copied().unwrap_or_default()
+            }),
+        }
+    }
 }
 
 /// One pass's sums for one pixel (`PixelSums` in `shaders/scene.wgsl`), in f32: a pass holds

@@ -62,6 +62,106 @@ impl Drop for GpuRenderer {
     }
 }
 
+/// A flag and a message that wgpu's device-lost callback sets, for `check_device`.
+fn watch_device_loss(device: &wgpu::Device) -> Arc<(AtomicBool, Mutex<String>)> {
+    let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));
+    let flag = lost.clone();
+    device.set_device_lost_callback(move |reason, msg| {
+        *flag.1.lock().unwrap() = format!("{reason:?}: {msg}");
+        flag.0.store(true, Ordering::SeqCst);
+    });
+    lost
+}
+
+/// The kernel specialised to the scene (`shader::source`), with naga's runtime checks or
+/// without them.
+fn compile_kernel(
+    device: &wgpu::Device,
+    scene: &FlatScene,
+    checks: Checks,
+    residency: Residency,
+) -> wgpu::ShaderModule {
+    let source = super::shader::source(residency, array_lengths(scene));
+    let desc = wgpu::ShaderModuleDescriptor {
+        label: Some("hexray path tracer"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    };
+    match checks {
+        Checks::Checked => device.create_shader_module(desc),
+        // SAFETY: the kernel's loops all terminate (BVH traversal visits each node at most
+        // once; the path loop ends by Russian roulette with probability >= 0.05 per bounce
+        // after bounce 3; the sample loop is counted), and every index is in bounds by
+        // construction (node, primitive and material indices come from the flattened scene,
+        // pixel indices are checked against the tile).
+        Checks::Unchecked => unsafe {
+            device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+        },
+    }
+}
+
+/// One film band's pass sums on the device, and the buffer they are read back through.
+fn pixel_sums_buffers(
+    device: &wgpu::Device,
+    film_rows: u32,
+    width: u32,
+) -> (wgpu::Buffer, wgpu::Buffer) {
+    let sums_size = film_rows as u64 * width as u64 * PIXEL_SUMS_BYTES;
+    let sums = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("pixel sums"),
+        size: sums_size,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("pixel sums readback"),
+        size: sums_size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    (sums, readback)
+}
+
+/// Bind group 0 of `shaders/scene.wgsl`: the six scene arrays as `residency` lays them out, the
+/// frame, the pass sums.
+fn scene_bind_group(
+    device: &wgpu::Device,
+    residency: Residency,
+    scene: &FlatScene,
+    layout: &wgpu::BindGroupLayout,
+    frame_buffer: &wgpu::Buffer,
+    sums: &wgpu::Buffer,
+) -> Result<wgpu::BindGroup> {
+    let buffers = [
+        upload(device, residency, "triangles", &scene.triangles),
+        upload(device, residency, "spheres", &scene.spheres),
+        upload(device, residency, "materials", &scene.materials),
+        upload(device, residency, "emitters", &scene.emitters),
+        upload(device, residency, "bvh nodes", &scene.nodes),
+        upload(device, residency, "primitive refs", &packed_prims(scene)),
+    ];
+    let mut entries = buffer_entries(buffers.iter());
+    entries.push(wgpu::BindGroupEntry {
+        binding: 6,
+        resource: frame_buffer.as_entire_binding(),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: 7,
+        resource: sums.as_entire_binding(),
+    });
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout,
+        entries: &entries,
+    });
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        bail!("binding the scene failed: {e}");
+    }
+    Ok(bind_group)
+}
+
 impl GpuRenderer {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -79,32 +179,11 @@ impl GpuRenderer {
         // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
         check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
         let (width, height) = (camera.width, camera.height);
-        let lost = Arc::new((AtomicBool::new(false), Mutex::new(String::new())));
-        {
-            let lost = lost.clone();
-            device.set_device_lost_callback(move |reason, msg| {
-                *lost.1.lock().unwrap() = format!("{reason:?}: {msg}");
-                lost.0.store(true, Ordering::SeqCst);
-            });
-        }
+        let lost = watch_device_loss(device);
 
+        // The kernel and its pipelines: path tracing's one, or the light-subpath methods' passes.
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let source = super::shader::source(residency, array_lengths(scene));
-        let desc = wgpu::ShaderModuleDescriptor {
-            label: Some("hexray path tracer"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        };
-        let module = match checks {
-            Checks::Checked => device.create_shader_module(desc),
-            // SAFETY: the kernel's loops all terminate (BVH traversal visits each node at most
-            // once; the path loop ends by Russian roulette with probability >= 0.05 per bounce
-            // after bounce 3; the sample loop is counted), and every index is in bounds by
-            // construction (node, primitive and material indices come from the flattened scene,
-            // pixel indices are checked against the tile).
-            Checks::Unchecked => unsafe {
-                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            },
-        };
+        let module = compile_kernel(device, scene, checks, residency);
         let layout = bind_group_layout(device, residency);
         let (pipeline, bidirectional) = if method.splats() {
             let b = Bidirectional::new(
@@ -127,60 +206,16 @@ impl GpuRenderer {
             bail!("the GPU rejected the {method} kernel: {e}");
         }
 
-        let frame = Frame {
+        let vertex_capacity = bidirectional.as_ref().map_or(0, |b| b.capacity);
+        let frame = Frame::first(
+            scene,
             camera,
             seed,
-            first_sample: 0,
-            sample_count: 0,
-            num_emitters: scene.emitters.len() as u32,
-            tile_origin: [0, 0],
-            tile_size: [width, height],
-            max_bounces: faults.max_bounces,
-            specular_scale: faults.specular_scale,
-            light_samples: 1,
-            grey_indirect: faults.grey_indirect as u32,
-            method: match method {
-                Method::Path => 0,
-                Method::Light => 1,
-                Method::Bdpt => 2,
-                Method::Sppm => 3,
-                Method::Vcm => 4,
-                Method::VcmFull => 5,
-            },
-            n_light_paths: width * height,
-            slot: 0,
-            vertex_capacity: bidirectional.as_ref().map_or(0, |b| b.capacity),
-            path_origin: 0,
-            path_count: 0,
-            importance_missing_cos: faults.importance_missing_cos as u32,
+            faults,
+            method,
             shadow_threshold,
-            merge_vm: 0.0,
-            merge_vc: 0.0,
-            merge_normalization: 0.0,
-            film_row: 0,
-            film_rows: height,
-            band_pixels: width * height,
-            wave_origin: 0,
-            continue_at_vanishing_density: faults.continue_at_vanishing_density as u32,
-            merge_rr_threshold: if matches!(method, Method::Vcm | Method::VcmFull) {
-                crate::transport::subpath::MERGE_RR_THRESHOLD
-            } else {
-                0.0
-            },
-            merge_rr_undivided: faults.merge_rr_undivided as u32,
-            planar_mirror_count: scene.planar_mirrors.len() as u32,
-            camera_goes_on: 1,
-            merge_radius: 0.0,
-            // Whether the method merges within the clearance; the iteration clears it where it
-            // does not merge (`Bidirectional`).
-            merges_within_clearance: (method.merges_within_clearance()
-                && !faults.merge_ignores_clearance) as u32,
-            clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
-            pad0: 0,
-            planar_mirrors: std::array::from_fn(|i| {
-                scene.planar_mirrors.get(i).copied().unwrap_or_default()
-            }),
-        };
+            vertex_capacity,
+        );
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
             contents: bytemuck::bytes_of(&frame),
@@ -194,47 +229,8 @@ impl GpuRenderer {
             (largest_binding(&device.limits()) / (width as u64 * PIXEL_SUMS_BYTES))
                 .clamp(1, height as u64) as u32
         };
-        let sums_size = film_rows as u64 * width as u64 * PIXEL_SUMS_BYTES;
-        let sums = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pixel sums"),
-            size: sums_size,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pixel sums readback"),
-            size: sums_size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let buffers = [
-            upload(device, residency, "triangles", &scene.triangles),
-            upload(device, residency, "spheres", &scene.spheres),
-            upload(device, residency, "materials", &scene.materials),
-            upload(device, residency, "emitters", &scene.emitters),
-            upload(device, residency, "bvh nodes", &scene.nodes),
-            upload(device, residency, "primitive refs", &packed_prims(scene)),
-        ];
-        let mut entries = buffer_entries(buffers.iter());
-        entries.push(wgpu::BindGroupEntry {
-            binding: 6,
-            resource: frame_buffer.as_entire_binding(),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 7,
-            resource: sums.as_entire_binding(),
-        });
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
-            layout: &layout,
-            entries: &entries,
-        });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            bail!("binding the scene failed: {e}");
-        }
+        let (sums, readback) = pixel_sums_buffers(device, film_rows, width);
+        let bind_group = scene_bind_group(device, residency, scene, &layout, &frame_buffer, &sums)?;
         Ok(GpuRenderer {
             device: device.clone(),
             queue: queue.clone(),
