@@ -170,8 +170,7 @@ pub fn render_iterations(
     film: &mut Film,
 ) -> u64 {
     assert!(method.splats(), "{method} does not trace light subpaths");
-    let (w, h) = (film.width, film.height);
-    let n_paths = w * h;
+    let n_paths = film.width * film.height;
     let mode = match method {
         Method::Light => LightPassMode::LightTracing,
         Method::Sppm => LightPassMode::PhotonMapping,
@@ -185,24 +184,68 @@ pub fn render_iterations(
         } else {
             0.0
         };
-        let merge = MergeMis::new(radius, n_paths, method);
-        let pass = LightPass {
+        let iteration = Iteration {
             scene,
             camera,
+            seed,
+            s,
+            method,
+            faults,
+            n_paths,
+            radius,
+            merge: MergeMis::new(radius, n_paths, method),
+        };
+        rays += iteration.light_pass(mode, buffers);
+        if radius > 0.0 {
+            iteration.build_grid(buffers);
+        }
+        let results = iteration.camera_pass(buffers, film.width, film.height);
+        rays += add_iteration(film, results);
+    }
+    rays
+}
+
+/// One iteration of the light-subpath methods: what its light pass and camera pass share.
+struct Iteration<'a> {
+    scene: &'a FlatScene,
+    camera: &'a Camera,
+    seed: u32,
+    /// The iteration's index: its sample index in every pixel's streams.
+    s: u32,
+    method: Method,
+    faults: Faults,
+    /// N, the light subpaths of an iteration: one per pixel.
+    n_paths: u32,
+    /// The merge radius of this iteration (0: no merging).
+    radius: f32,
+    merge: MergeMis,
+}
+
+impl Iteration<'_> {
+    /// Whether the camera vertices merge within their clearance rather than the full radius.
+    fn local_radius(&self) -> bool {
+        self.method.merges_within_clearance()
+            && self.radius > 0.0
+            && !self.faults.merge_ignores_clearance
+    }
+
+    /// The light pass: every light subpath, in chunks; the chunks' vertices are joined in
+    /// subpath order into `buffers`, their splats added to `buffers.splats`. Returns the rays.
+    fn light_pass(&self, mode: LightPassMode, buffers: &mut LightPassBuffers) -> u64 {
+        let (scene, seed, s, n_paths) = (self.scene, self.seed, self.s, self.n_paths);
+        let pass = LightPass {
+            scene,
+            camera: self.camera,
             n_light_paths: n_paths,
             mode,
-            faults,
+            faults: self.faults,
             camera_subpaths: &buffers.camera_subpaths,
             shadow_threshold: buffers.shadow_threshold,
-            merge,
-            merges: radius > 0.0,
-            radius,
-            local_radius: method.merges_within_clearance()
-                && radius > 0.0
-                && !faults.merge_ignores_clearance,
+            merge: self.merge,
+            merges: self.radius > 0.0,
+            radius: self.radius,
+            local_radius: self.local_radius(),
         };
-        // The light pass: every light subpath, in chunks; the chunks' vertices are joined in
-        // subpath order.
         let chunks: Vec<(Vec<LightVertex>, Vec<u32>, u64)> = (0..n_paths.div_ceil(LIGHT_CHUNK))
             .into_par_iter()
             .map(|c| {
@@ -224,6 +267,7 @@ pub fn render_iterations(
                 (vertices, ends, rays)
             })
             .collect();
+        let mut rays = 0;
         buffers.vertices.clear();
         buffers.starts.clear();
         buffers.starts.push(0);
@@ -233,35 +277,43 @@ pub fn render_iterations(
             buffers.vertices.extend_from_slice(&vertices);
             rays += chunk_rays;
         }
+        rays
+    }
 
-        // The hash grid of the iteration's light vertices, and what a merge reads of each in
-        // the grid's entry order (merging).
-        if radius > 0.0 {
-            buffers.grid =
-                HashGrid::build(&buffers.vertices, |v| v.p.into(), buffers.grid_min, radius);
-            let (vertices, connects) = (&buffers.vertices, method.connects());
-            buffers.records.clear();
-            buffers
-                .records
-                .par_extend(buffers.grid.entries.par_iter().map(|e| {
-                    bdpt::PhotonRecord::new(&vertices[entry_index(e) as usize], &merge, connects)
-                }));
-        }
+    /// The hash grid of the iteration's light vertices, and what a merge reads of each in the
+    /// grid's entry order.
+    fn build_grid(&self, buffers: &mut LightPassBuffers) {
+        let merge = &self.merge;
+        buffers.grid = HashGrid::build(
+            &buffers.vertices,
+            |v| v.p.into(),
+            buffers.grid_min,
+            self.radius,
+        );
+        let (vertices, connects) = (&buffers.vertices, self.method.connects());
+        buffers.records.clear();
+        buffers.records.par_extend(
+            buffers.grid.entries.par_iter().map(|e| {
+                bdpt::PhotonRecord::new(&vertices[entry_index(e) as usize], merge, connects)
+            }),
+        );
+    }
 
-        // The camera pass: each pixel's camera subpaths, plus its splats.
-        let buffers = &*buffers;
+    /// The camera pass: each pixel's camera subpaths, tile by tile, plus its splats; each
+    /// pixel's value for the iteration (None where its splat sum overflowed), with the rays.
+    fn camera_pass(&self, buffers: &LightPassBuffers, w: u32, h: u32) -> Vec<TileValues> {
+        let (scene, seed, s, n_paths) = (self.scene, self.seed, self.s, self.n_paths);
+        let (method, faults, radius, merge) = (self.method, self.faults, self.radius, self.merge);
         let camera_pass = bdpt::CameraPass {
             scene,
-            camera,
+            camera: self.camera,
             n_light_paths: n_paths,
             faults,
             shadow_threshold: buffers.shadow_threshold,
             connects: method.connects(),
             merge,
             radius,
-            local_radius: method.merges_within_clearance()
-                && radius > 0.0
-                && !faults.merge_ignores_clearance,
+            local_radius: self.local_radius(),
             photons: (radius > 0.0).then(|| {
                 debug_assert_eq!(buffers.records.len(), buffers.grid.entries.len());
                 bdpt::Photons {
@@ -272,7 +324,7 @@ pub fn render_iterations(
             }),
         };
         let tiles_x = w.div_ceil(TILE);
-        let results: Vec<TileValues> = (0..tiles_x * h.div_ceil(TILE))
+        (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
             .map_init(bdpt::CameraTerms::default, |terms, t| {
                 let (tx, ty) = (t % tiles_x, t / tiles_x);
@@ -326,24 +378,30 @@ pub fn render_iterations(
                 debug_assert!(radiance.next().is_none(), "a subpath's radiance left over");
                 (out, rays)
             })
-            .collect();
-
-        // One sample per pixel, and the iteration's image mean as one sample of the image's.
-        let mut image_sum = glam::DVec3::ZERO;
-        for (tile, tile_rays) in results {
-            for (index, value) in tile {
-                // A splat sum that overflowed is dropped like a non-finite sample.
-                let v = value.unwrap_or(glam::Vec3::NAN);
-                film.pixels[index].add(v);
-                if v.is_finite() {
-                    image_sum += v.as_dvec3();
-                }
-            }
-            rays += tile_rays;
-        }
-        film.iteration_means
-            .get_or_insert_with(PixelStats::default)
-            .add((image_sum / (w as f64 * h as f64)).as_vec3());
+            .collect()
     }
+}
+
+/// Adds an iteration's pixel values to the film, one sample per pixel, and the iteration's image
+/// mean as one sample of the image's (batch means). Returns the camera pass's rays.
+fn add_iteration(film: &mut Film, results: Vec<TileValues>) -> u64 {
+    let (w, h) = (film.width, film.height);
+    let mut rays = 0;
+    // One sample per pixel, and the iteration's image mean as one sample of the image's.
+    let mut image_sum = glam::DVec3::ZERO;
+    for (tile, tile_rays) in results {
+        for (index, value) in tile {
+            // A splat sum that overflowed is dropped like a non-finite sample.
+            let v = value.unwrap_or(glam::Vec3::NAN);
+            film.pixels[index].add(v);
+            if v.is_finite() {
+                image_sum += v.as_dvec3();
+            }
+        }
+        rays += tile_rays;
+    }
+    film.iteration_means
+        .get_or_insert_with(PixelStats::default)
+        .add((image_sum / (w as f64 * h as f64)).as_vec3());
     rays
 }
