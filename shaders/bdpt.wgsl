@@ -69,6 +69,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
     let through_mirrors = takes_mirror_light(connects());
     var previous_diffuse = false;
     var by_a_mirror = false;
+    // The distance from the eye along the subpath, which sets a vertex's merge radius
+    // (footprint_share).
+    var travelled = 0.0;
 
     loop {
         // Step 2 - closest hit; the quantities turn the direction's density into an area
@@ -80,6 +83,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
         let hit = surface_hit(ray, candidate);
         let material = materials[hit.material];
         let wo = -ray.d;
+        travelled += hit.t;
         let cos_o = dot(hit.n, wo);
         if density_vanishes(cos_o) && frame.continue_at_vanishing_density == 0u {
             // A grazing hit that no f32 density can describe ends the subpath.
@@ -113,9 +117,10 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
             let albedo = material.color;
             let pdf_rev = abs(cos_o) * FRAC_1_PI;
-            // The merge radius here as a share of the iteration's (`merge_share`: vcm within the
-            // vertex's clearance, 1 otherwise), and merging's MIS constants for it.
-            let share = merge_share(hit.p, hit.prim);
+            // The merge radius here as a share of the iteration's largest (`merge_share`: by the
+            // distance from the eye, and in vcm within the vertex's clearance), and merging's
+            // MIS constants for it.
+            let share = merge_share(hit.p, hit.prim, footprint_share(travelled));
             let merge = merge_within(iteration_merge(), share);
 
             // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,

@@ -177,9 +177,10 @@ fn trace_light_path(sampler: Sampler, path: u32) {
                     let g_camera = splat_importance(rv) * bsdf.cos_i / rv.dist2;
                     var w = 1.0;
                     if bidirectional {
-                        // A camera subpath's merge here would use this vertex's radius (vcm:
-                        // within its clearance).
-                        let merge = merge_within(iteration_merge(), merge_share(hit.p, hit.prim));
+                        // A camera subpath's merge here would use this vertex's radius, by its
+                        // distance from the eye (vcm: within its clearance).
+                        let share = merge_share(hit.p, hit.prim, footprint_share(sqrt(rv.dist2)));
+                        let merge = merge_within(iteration_merge(), share);
                         w = weight_to_camera(m, merge, g_camera * camera_subpaths(pixel), n_paths, bsdf.pdf_rev);
                     }
                     let value = throughput * bsdf.f * (g_camera * w / n_paths);

@@ -137,7 +137,9 @@ struct Frame {
     // everywhere (0), and the least share of r_i it leaves (`merging::CLEARANCE_FLOOR`).
     merges_within_clearance: u32,
     clearance_floor: f32,
-    pad0: u32,
+    // The view's reach: a camera vertex this far from the eye or farther merges within
+    // merge_radius, a nearer one within its share (`merging::footprint_share`; 0: all within it).
+    merge_reach: f32,
     // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }

@@ -1,7 +1,9 @@
 //! Stopping a render from outside. Ctrl-C (SIGINT), SIGTERM (what Slurm's `scancel`, its time
 //! limits and preemption, and Kubernetes send) and SIGHUP (a closed terminal) all end the
-//! render after the pass in flight; the samples so far are written and the process exits with
-//! the conventional status 128 + the signal's number (130, 143, 129). A second signal exits at
+//! render within about a second: the backends look at the flag between tiles, chunks and GPU
+//! dispatches and drop the sample or iteration under way whole (`Backend::pass_until`); the
+//! samples finished so far are written and the process exits with the conventional status
+//! 128 + the signal's number (130, 143, 129). A second signal exits at
 //! once with that status: files already written stay whole, since every output is renamed into
 //! place.
 
@@ -61,7 +63,7 @@ impl StopRequest {
         Ok(())
     }
 
-    /// The flag the render loop polls between passes.
+    /// The flag the render loop polls between passes, and the backends within them.
     pub fn flag(&self) -> &AtomicBool {
         &self.flag
     }

@@ -22,7 +22,9 @@ fn cpu_against_gpu(
     gpu_faults: Faults,
 ) -> Option<Parity> {
     // Light tracing and BDPT do not merge: the radius is not used.
-    let radius = MergeRadius::default_for(&load(rel).1, method);
+    let (scene, flat) = load(rel);
+    let camera = hexray::transport::camera::Camera::new(&scene.desc.camera, SIZE, SIZE);
+    let radius = MergeRadius::default_for(&flat, &camera, method);
     gpu_against_cpu_iterations(rel, SIZE, iterations, method, radius, gpu_faults)
 }
 

@@ -198,10 +198,7 @@ fn edge_z(faults: hexray::transport::faults::Faults) -> f64 {
     use hexray::transport::merging::MergeRadius;
     use hexray::transport::method::Method;
     let strip = strip_pixels();
-    let radius = MergeRadius {
-        initial: EDGE_RADIUS,
-        alpha: 1.0,
-    };
+    let radius = MergeRadius::uniform(EDGE_RADIUS, 1.0);
     let iterations = Render::file(EDGE)
         .size(32, 32)
         .spp(64)

@@ -124,7 +124,7 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merge_radius,
             merges_within_clearance,
             clearance_floor,
-            pad0,
+            merge_reach,
             planar_mirrors
         }),
         rust_layout!(PlanarMirror {
@@ -223,6 +223,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
     };
     use hexray::math::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::transport::clearance::{COPLANAR_COS, COPLANAR_OFFSET};
+    use hexray::transport::merging::FOOTPRINT_FLOOR;
     use hexray::transport::planar_mirror::{BOUNDS_SLACK, MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
     use hexray::transport::splat::FRACTION_BITS;
     use hexray::transport::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -249,6 +250,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         SCAN_BLOCK,
         COPLANAR_COS,
         COPLANAR_OFFSET,
+        FOOTPRINT_FLOOR,
     )
 }
 

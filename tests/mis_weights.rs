@@ -31,10 +31,10 @@
 use crate::common::*;
 use glam::Vec3;
 use hexray::accel::bvh::intersect_closest;
-use hexray::cpu::light_path::is_diffuse;
 use hexray::layout::{FlatScene, KIND_EMITTER};
 use hexray::math::geometry::{offset_ray_origin, Ray};
 use hexray::math::sampling::Sampler;
+use hexray::transport::bsdf::is_diffuse;
 use hexray::transport::bsdf::{sample_bsdf, Transport};
 use hexray::transport::camera::Camera;
 use hexray::transport::light::emitter_pdf_area;

@@ -326,3 +326,39 @@ fn checkpoints_survive_a_kill_without_warning_and_resume() {
         Some((spp + 2).to_string().as_str())
     );
 }
+
+crate::common::on_each_backend! {
+    /// A stop under way (a vcm iteration at 512x512 takes about a second on 2 cores and on
+    /// lavapipe) drops the iteration it finds whole, so the film holds finished iterations only,
+    /// and nothing of the dropped one (its splats) is left to the iterations after it: the
+    /// render goes on to the same image as one never stopped (bit for bit on the CPU; on a GPU
+    /// within the same-streams allowance of its rounding, `photon_merging.rs`).
+    fn a_stop_under_way_drops_the_iteration_whole(backend) {
+        use crate::common::Render;
+        use hexray::analysis::stats::MeanImage;
+        use hexray::transport::method::Method;
+        let render = Render::file("scenes/cornell_box.json")
+            .size(512, 512)
+            .spp(2)
+            .seed(9)
+            .method(Method::Vcm);
+        let (stopped, kept) = render.stopped_under_way(backend, Duration::from_millis(200));
+        let whole = render.on(backend);
+        eprintln!("{backend:?}: the stopped pass kept {kept} of 2 iterations");
+        if backend == crate::common::Backend::Cpu {
+            // 200 ms into the first of two iterations of about a second each.
+            assert!(kept < 2, "the stop was not seen under way");
+        }
+        let (a, b) = (MeanImage::from_film(&stopped), MeanImage::from_film(&whole));
+        let differ = a
+            .mean
+            .iter()
+            .zip(&b.mean)
+            .filter(|(x, y)| {
+                (0..3).any(|c| (x[c] - y[c]).abs() > 1e-4 * (x[c].abs() + y[c].abs() + 1e-6))
+            })
+            .count();
+        let allowed = if backend == crate::common::Backend::Cpu { 0 } else { a.mean.len() / 100 };
+        assert!(differ <= allowed, "{differ} pixels differ from the render never stopped");
+    }
+}

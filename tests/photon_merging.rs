@@ -12,7 +12,7 @@ use hexray::analysis::stats::MeanImage;
 use hexray::film::Film;
 use hexray::math::sampling::Sampler;
 use hexray::transport::faults::Faults;
-use hexray::transport::merging::{MergeRadius, DEFAULT_RADIUS_FACTOR};
+use hexray::transport::merging::{scene_radius, MergeRadius, DEFAULT_ALPHA};
 use hexray::transport::method::Method;
 
 /// Random points: clustered on a few planes (as light vertices on walls are) and scattered.
@@ -148,10 +148,7 @@ fn the_grid_check_rejects_a_search_of_one_cell() {
 #[test]
 fn vcm_without_merging_is_bdpt_bit_for_bit() {
     let scene = "scenes/tncg15_room.json";
-    let off = MergeRadius {
-        initial: 0.0,
-        alpha: 0.75,
-    };
+    let off = MergeRadius::uniform(0.0, 0.75);
     let render = Render::file(scene).size(48, 48).spp(3).seed(5);
     let bdpt = render.method(Method::Bdpt).cpu();
     for method in [Method::Vcm, Method::VcmFull] {
@@ -161,10 +158,7 @@ fn vcm_without_merging_is_bdpt_bit_for_bit() {
             "{method} --radius 0 differs from bdpt"
         );
         // And merging at a radius does change the image: the comparison can fail.
-        let on = MergeRadius {
-            initial: 0.05,
-            alpha: 0.75,
-        };
+        let on = MergeRadius::uniform(0.05, 0.75);
         let merged = render.method(method).radius(on).cpu();
         assert!(merged.pixels != bdpt.pixels);
     }
@@ -194,8 +188,7 @@ const GLASS_REFERENCE: &str = "tests/data/references/stability/glass_room_32.exr
 /// the bias as the radius², faster), and the image mean after 4n iterations is within 4
 /// combined standard errors of the reference's: its bias has fallen below the noise.
 fn converges(scene: &str, reference: &str, method: Method, n: u32) {
-    let (_, flat) = load(scene);
-    let radius = MergeRadius::default_for(&flat, method);
+    let radius = default_radius(scene, method);
     let truth = reference::read(reference);
     let render = Render::file(scene)
         .size(32, 32)
@@ -249,8 +242,7 @@ fn vcm_converges_on_glass_room() {
 /// instead of 1 / (π r²)) are off by 3 / (4 r), and the image mean is far from the reference.
 #[test]
 fn the_convergence_check_rejects_a_ball_kernel() {
-    let (_, flat) = load(CAUSTIC);
-    let radius = MergeRadius::default_for(&flat, Method::Vcm);
+    let radius = default_radius(CAUSTIC, Method::Vcm);
     let ball = Faults {
         merge_kernel_ball: true,
         ..Faults::NONE
@@ -276,7 +268,7 @@ fn the_convergence_check_rejects_a_ball_kernel() {
 /// sppm at 0.01 of the scene radius: one block at p = 1.5e-5, the same on lavapipe and an
 /// NVIDIA H200).
 fn gpu_parity(rel: &str, method: Method, gpu_faults: Faults) -> Option<Parity> {
-    let radius = MergeRadius::default_for(&load(rel).1, method);
+    let radius = default_radius(rel, method);
     gpu_against_cpu_iterations(rel, 64, 48, method, radius, gpu_faults)
 }
 
@@ -370,17 +362,21 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// arithmetic's, not a race's.
 const FLIPPED_PIXELS_ALLOWED: usize = 64 * 64 / 100;
 
+/// The merge radius of the same-streams checks as a share of the scene's bounding-sphere radius,
+/// the same at every vertex: 0.01, where [`FLIPPED_PIXELS_ALLOWED`] was measured.
+const SAME_STREAMS_RADIUS: f32 = 0.01;
+
 /// A pixel agrees when its relMSE term is at most this (a relative difference of 1e-4).
 const ROUNDING_TERM: f64 = 1e-8;
 
 /// The number of pixels in which the GPU's render differs from the CPU's on the same streams
 /// beyond a relative 1e-4: sppm or vcm, 64x64, 16 iterations, seed 7, with `gpu_faults` planted
 /// on the GPU, at the merge radius [`FLIPPED_PIXELS_ALLOWED`] was measured at,
-/// `DEFAULT_RADIUS_FACTOR` (0.01) of the scene radius, for every method: vcm's own default is
-/// three times that, and the flips grow with the radius (see there).
+/// [`SAME_STREAMS_RADIUS`] of the scene radius at every vertex, for every method: the flips grow
+/// with the radius (see there).
 fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<usize> {
     let (_, flat) = load(rel);
-    let radius = MergeRadius::of_scene(&flat, DEFAULT_RADIUS_FACTOR);
+    let radius = MergeRadius::uniform(SAME_STREAMS_RADIUS * scene_radius(&flat), DEFAULT_ALPHA);
     same_streams_at(rel, method, radius, gpu_faults)
 }
 
@@ -444,10 +440,7 @@ fn gpu_vcm_equals_cpu_on_the_same_streams_in_glass_room() {
 /// of the shader's mirror array is checked here.
 #[test]
 fn gpu_bdpt_equals_cpu_on_the_same_streams_through_planar_mirrors() {
-    let off = MergeRadius {
-        initial: 0.0,
-        alpha: 0.75,
-    };
+    let off = MergeRadius::uniform(0.0, 0.75);
     for (rel, mirrors) in [
         ("scenes/tncg15_room.json", 1),
         ("scenes/glass_room.json", 2),
@@ -493,8 +486,7 @@ fn the_same_streams_check_rejects_a_gpu_ball_kernel() {
 fn gpu_renders_twice_bit_for_bit(method: Method, second_seed: u32) -> Option<bool> {
     gpu()?;
     let rel = "scenes/tncg15_room.json";
-    let (_, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat, method);
+    let radius = default_radius(rel, method);
     let render = Render::file(rel)
         .size(64, 64)
         .spp(8)
@@ -534,8 +526,7 @@ fn the_bit_for_bit_check_rejects_another_seed() {
 fn same_streams_in_waves(method: Method) -> Option<usize> {
     gpu()?;
     let rel = "scenes/tncg15_room.json";
-    let (_, flat) = load(rel);
-    let radius = MergeRadius::default_for(&flat, method);
+    let radius = default_radius(rel, method);
     let render = Render::file(rel)
         .size(64, 64)
         .spp(8)
@@ -579,10 +570,7 @@ fn gpu_vcm_without_merging_is_bdpt() {
         return;
     }
     let rel = "scenes/tncg15_room.json";
-    let off = MergeRadius {
-        initial: 0.0,
-        alpha: 0.75,
-    };
+    let off = MergeRadius::uniform(0.0, 0.75);
     let render = Render::file(rel).size(48, 48).spp(3).seed(5);
     let vcm = render.method(Method::Vcm).radius(off).gpu();
     let bdpt = render.method(Method::Bdpt).gpu();
@@ -600,6 +588,7 @@ const SPHERE_FURNACE: &str = "scenes/furnace/sphere.json";
 const FURNACE_RADIUS: MergeRadius = MergeRadius {
     initial: 0.1,
     alpha: 1.0,
+    reach: 0.0,
 };
 
 /// The merging furnace on `backend`: 256 iterations at 32x32, seed 21 on the CPU, 22 on the GPU.
@@ -715,10 +704,7 @@ fn radius_exponent(faults: Faults) -> (f64, f64) {
     let (ref_mean, ref_se) = reference.image_mean();
     let mut fit = Vec::new();
     for (k, r) in [0.1f32, 0.2, 0.3].into_iter().enumerate() {
-        let radius = MergeRadius {
-            initial: r,
-            alpha: 1.0,
-        };
+        let radius = MergeRadius::uniform(r, 1.0);
         let film = Render::file(FLOOR)
             .size(32, 32)
             .spp(8000)

@@ -187,10 +187,9 @@ pub fn make_backend<'a>(
             )?;
             renderer.set_light_samples(light_samples);
             if method.merges() {
-                let base = crate::transport::merging::MergeRadius::default_for(flat, method);
-                renderer.set_merge_radius(crate::gpu::context::default_merge_radius(
-                    &g.info, flat, base,
-                ));
+                let base =
+                    crate::transport::merging::MergeRadius::default_for(flat, &camera, method);
+                renderer.set_merge_radius(crate::gpu::context::default_merge_radius(&g.info, base));
             }
             let b = crate::render::GpuBackend {
                 renderer,

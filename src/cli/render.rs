@@ -4,6 +4,7 @@
 use super::*;
 use anyhow::{Context, Result};
 use clap::Args;
+use hexray::cpu::dark_image::dark_image_warning;
 use hexray::film::file::{self as film_file, FilmIdentity};
 use hexray::film::output::{self, Metadata, RgbImage};
 use hexray::film::Film;
@@ -45,13 +46,19 @@ pub(crate) struct RenderArgs {
     /// time on the reference scenes, docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
-    /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units (default: 0.03 x the
-    /// scene's bounding-sphere radius for vcm, 0.01 x for sppm and vcm-full, 0.003 x on a
-    /// hardware GPU, whose renders run many more iterations). Iteration i merges within
-    /// r_1 i^((alpha-1)/2); vcm merges within less where another surface is nearer to the
-    /// camera vertex (its clearance, at least 0.1 of that). vcm and vcm-full with 0 are bdpt.
+    /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units, the same at every
+    /// camera vertex. Default: a disk that spans a fixed share of the view at the vertex's
+    /// distance from the camera (vcm 0.018 of the view's height there, sppm and vcm-full a third
+    /// of that; 0.3 x on a hardware GPU, whose renders run many more iterations), up to the
+    /// distance that half of the view lies within; vcm-full takes that largest disk everywhere.
+    /// Iteration i merges within r_1 i^((alpha-1)/2); vcm merges within less where another
+    /// surface is nearer to the camera vertex (its clearance, at least 0.1 of that). vcm and
+    /// vcm-full with 0 are bdpt.
     #[arg(long, value_parser = parse_radius)]
     pub(crate) radius: Option<f32>,
+    /// The view's reach of a resumed render (`MergeRadius::reach`), taken from its film.
+    #[arg(skip)]
+    pub(crate) reach: Option<f32>,
     /// Radius reduction alpha of sppm, vcm and vcm-full, in (0, 1] (default 0.75; 1 keeps the
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
@@ -141,16 +148,20 @@ pub(crate) fn merge_radius_of(
     method: Method,
     radius: Option<f32>,
     alpha: Option<f32>,
+    reach: Option<f32>,
     flat: &FlatScene,
+    camera: &Camera,
 ) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
     if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
             "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
         ));
     }
-    let mut r = hexray::transport::merging::MergeRadius::default_for(flat, method);
+    let mut r = hexray::transport::merging::MergeRadius::default_for(flat, camera, method);
     if let Some(v) = radius {
+        // A radius given (or resumed) is r_1 at the reach resumed, everywhere if none.
         r.initial = v;
+        r.reach = reach.unwrap_or(0.0);
     }
     if let Some(a) = alpha {
         r.alpha = a;
@@ -203,6 +214,7 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
     );
     args.light_samples = id.light_samples;
     args.radius = id.merge_radius;
+    args.reach = id.merge_reach;
     args.alpha = id.merge_alpha;
     args.scene.get_or_insert_with(|| PathBuf::from(&id.scene));
     args.out.get_or_insert_with(|| exr.to_path_buf());
@@ -259,16 +271,17 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
 
     let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
-    let radius = merge_radius_of(method, args.radius, args.alpha, &flat).map_err(refuse)?;
+    let radius = merge_radius_of(method, args.radius, args.alpha, args.reach, &flat, &camera)
+        .map_err(refuse)?;
     // The last check before any work: the outputs can be written (not found after the render).
     output::check_writable(&out, args.variance)
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
     let gpu = choose_gpu(args)?;
-    // Without --radius, a hardware GPU merges within its own default share of the scene
-    // (`merging::HARDWARE_GPU_RADIUS_FACTOR`): its renders run many more iterations.
+    // Without --radius, a hardware GPU merges within a share of the default
+    // (`merging::HARDWARE_GPU_RADIUS_SCALE`): its renders run many more iterations.
     let radius = match &gpu {
         Some(g) if args.radius.is_none() && method.merges() => {
-            gpu::context::default_merge_radius(&g.info, &flat, radius)
+            gpu::context::default_merge_radius(&g.info, radius)
         }
         _ => radius,
     };
@@ -326,6 +339,10 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     write_outputs(&out, &film, &meta, &id, args)?;
 
     let dropped_share = warn_dropped(&film);
+    // The safety net: an image nearly black where the scene's light reaches the camera.
+    if let Some(w) = dark_image_warning(&flat, &camera, method, film.image_mean().0) {
+        eprintln!("hexray: warning: {w}");
+    }
     if !args.quiet {
         summarise(
             args,
@@ -653,6 +670,7 @@ impl Record<'_> {
             method: method.to_string(),
             light_samples: args.light_samples,
             merge_radius: merges.then_some(self.radius.initial),
+            merge_reach: (merges && self.radius.reach > 0.0).then_some(self.radius.reach),
             merge_alpha: merges.then_some(self.radius.alpha),
             scene: self.scene_path.display().to_string(),
             scene_sha1: self.scene.sha1.clone(),

@@ -34,18 +34,19 @@
 use crate::accel::bvh::intersect_closest;
 use crate::accel::hash_grid::HashGrid;
 use crate::accel::packet::occluded_all;
-use crate::cpu::light_path::{is_diffuse, max_path_edges};
+use crate::cpu::light_path::max_path_edges;
 use crate::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
 use crate::layout::{FlatScene, KIND_EMITTER};
 use crate::math::geometry::{offset_ray_origin, Ray};
 use crate::math::sampling::{
     dim_bsdf, dim_connection, dim_light, dim_merge, dim_mirror, Sampler, DIM_CAMERA,
 };
+use crate::transport::bsdf::is_diffuse;
 use crate::transport::bsdf::{eval_diffuse, sample_bsdf, Transport};
 use crate::transport::camera::Camera;
 use crate::transport::faults::Faults;
 use crate::transport::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
-use crate::transport::merging::merge_share;
+use crate::transport::merging::{footprint_share, merge_share};
 use crate::transport::planar_mirror::{
     image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light,
 };
@@ -73,8 +74,10 @@ pub struct CameraPass<'a> {
     pub merge: MergeMis,
     /// The iteration's photons, for the merging methods.
     pub photons: Option<Photons<'a>>,
-    /// The iteration's merge radius.
+    /// The iteration's largest merge radius.
     pub radius: f32,
+    /// The view's reach (`MergeRadius::reach`; 0: every vertex merges within `radius`).
+    pub reach: f32,
     /// Whether merges at a vertex use its local radius (`merging::local_radius`).
     pub local_radius: bool,
 }
@@ -227,6 +230,9 @@ impl CameraPass<'_> {
         let through_mirrors = takes_mirror_light(self.connects, self.photons.is_some(), scene);
         let mut previous_diffuse = false;
         let mut by_a_mirror = false;
+        // The distance from the eye along the subpath, which sets a vertex's merge radius
+        // (`merging::footprint_share`).
+        let mut travelled = 0.0f32;
 
         loop {
             // Step 2 - closest hit; the quantities turn the direction's density into an area
@@ -237,6 +243,7 @@ impl CameraPass<'_> {
             };
             let material = scene.materials[hit.material as usize];
             let wo = -ray.d;
+            travelled += hit.t;
             let cos_o = hit.n.dot(wo);
             if density_vanishes(cos_o) && !faults.continue_at_vanishing_density {
                 // A grazing hit that no f32 density can describe ends the subpath.
@@ -276,9 +283,18 @@ impl CameraPass<'_> {
                 // step 4, so that its memory reads overlap with steps 4 and 5
                 // (`HashGrid::begin_query`; the CPU alone: a GPU hides the latency with other
                 // invocations).
-                // The merge radius here as a share of the iteration's (`merge_share`: vcm within
-                // the vertex's clearance, 1 otherwise), and merging's MIS constants for it.
-                let share = merge_share(scene, hit.p, hit.prim, self.radius, self.local_radius);
+                // The merge radius here as a share of the iteration's largest (`merge_share`:
+                // by the distance from the eye, and in vcm within the vertex's clearance), and
+                // merging's MIS constants for it.
+                let footprint = footprint_share(travelled, self.reach);
+                let share = merge_share(
+                    scene,
+                    hit.p,
+                    hit.prim,
+                    self.radius,
+                    footprint,
+                    self.local_radius,
+                );
                 let merge = self.merge.within(share);
                 // Russian roulette on the query (VCM): run with probability q, divided by q.
                 let merging = self.photons.as_ref().and_then(|photons| {

@@ -25,14 +25,14 @@
 use crate::accel::bvh::intersect_closest;
 use crate::accel::packet::occluded_all;
 use crate::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
-use crate::layout::{FlatScene, Material, KIND_DIFFUSE, KIND_EMITTER, PRIM_PADDING};
+use crate::layout::{FlatScene, KIND_EMITTER, PRIM_PADDING};
 use crate::math::geometry::{offset_ray_origin, Ray};
 use crate::math::sampling::{dim_light_bounce, dim_splat, Sampler, DIM_EMISSION, DIM_EMISSION_DIR};
-use crate::transport::bsdf::{eval_diffuse, sample_bsdf, Transport};
+use crate::transport::bsdf::{eval_diffuse, is_diffuse, sample_bsdf, Transport};
 use crate::transport::camera::{Camera, Raster};
 use crate::transport::faults::Faults;
 use crate::transport::light::sample_emission;
-use crate::transport::merging::merge_share;
+use crate::transport::merging::{footprint_share, merge_share};
 use crate::transport::planar_mirror::{starts_by_a_mirror, takes_mirror_light};
 use crate::transport::splat::Splats;
 use crate::transport::subpath::{
@@ -40,14 +40,6 @@ use crate::transport::subpath::{
     MergeMis, SubpathMis, LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX,
 };
 use glam::Vec3;
-
-/// Whether a material scatters diffusely (Lambert): diffuse surfaces, and emitters that also
-/// reflect. Only such vertices can be connected.
-#[inline]
-pub fn is_diffuse(material: &Material) -> bool {
-    material.kind == KIND_DIFFUSE
-        || (material.kind == KIND_EMITTER && Vec3::from(material.color).max_element() > 0.0)
-}
 
 /// What the light pass does with a subpath besides splatting it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,8 +71,10 @@ pub struct LightPass<'a> {
     pub merge: MergeMis,
     /// Whether this iteration merges (a radius above 0: SPPM, VCM).
     pub merges: bool,
-    /// The iteration's merge radius.
+    /// The iteration's largest merge radius.
     pub radius: f32,
+    /// The view's reach (`MergeRadius::reach`; 0: every vertex merges within `radius`).
+    pub reach: f32,
     /// Whether merges at a vertex use its local radius (`merging::local_radius`).
     pub local_radius: bool,
 }
@@ -314,12 +308,14 @@ impl LightPass<'_> {
                             _ => weight_to_camera(
                                 &mis,
                                 // A camera subpath's merge here would use this vertex's
-                                // radius (vcm: within its clearance).
+                                // radius, by its distance from the eye (vcm: within its
+                                // clearance).
                                 &self.merge.within(merge_share(
                                     self.scene,
                                     hit.p,
                                     hit.prim,
                                     self.radius,
+                                    footprint_share(r.dist2.sqrt(), self.reach),
                                     self.local_radius,
                                 )),
                                 g_camera * self.camera_subpaths[pixel] as f32,

@@ -2,6 +2,7 @@
 //! or over iterations of a light pass and a camera pass (light tracing, BDPT, SPPM, VCM).
 
 pub mod bdpt;
+pub mod dark_image;
 pub mod light_path;
 pub mod path;
 pub mod path_wavefront;
@@ -21,10 +22,14 @@ use crate::transport::splat::Splats;
 use crate::transport::subpath::{LightVertex, MergeMis};
 use light_path::{LightPass, LightPassMode};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Tiles are square blocks of this many pixels on a side: big enough to amortise scheduling,
 /// small enough that 2 to 64 threads balance on a 256x256 image.
 pub const TILE: u32 = 16;
+
+/// A stop that is never asked for, for the renders that run to their end.
+static NEVER: AtomicBool = AtomicBool::new(false);
 
 /// Adds samples `first..first + count` of every pixel to `film`, with rayon over tiles.
 ///
@@ -42,6 +47,33 @@ pub fn render_pass(
     faults: Faults,
     film: &mut Film,
 ) -> u64 {
+    render_pass_until(
+        scene,
+        camera,
+        seed,
+        first,
+        count,
+        light_samples,
+        faults,
+        film,
+        &NEVER,
+    )
+}
+
+/// [`render_pass`] until `stop` is set: a pass stopped before its end leaves `film` as it was
+/// (its tiles not yet begun are skipped), so that a stop takes effect within a tile's time.
+#[allow(clippy::too_many_arguments)]
+pub fn render_pass_until(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    first: u32,
+    count: u32,
+    light_samples: u32,
+    faults: Faults,
+    film: &mut Film,
+    stop: &AtomicBool,
+) -> u64 {
     let (w, h) = (film.width, film.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
@@ -51,6 +83,9 @@ pub fn render_pass(
     let updated: Vec<(Vec<(usize, PixelStats)>, u64)> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
+            if stop.load(Ordering::Relaxed) {
+                return (Vec::new(), 0);
+            }
             // The tile's pixels, their paths traced together (`path_wavefront::trace_pixels`).
             let mut tile = Vec::with_capacity((TILE * TILE) as usize);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
@@ -82,6 +117,10 @@ pub fn render_pass(
         })
         .collect();
     let mut rays = 0;
+    if stop.load(Ordering::SeqCst) {
+        // Stopped: the pass's samples are dropped whole, so every pixel keeps as many.
+        return updated.iter().map(|(_, r)| r).sum();
+    }
     for (tile, tile_rays) in updated {
         for (index, stats) in tile {
             film.pixels[index] = stats;
@@ -169,6 +208,28 @@ pub fn render_iterations(
     buffers: &mut LightPassBuffers,
     film: &mut Film,
 ) -> u64 {
+    render_iterations_until(
+        scene, camera, seed, first, count, method, faults, buffers, film, &NEVER,
+    )
+}
+
+/// [`render_iterations`] until `stop` is set: the iteration under way when it is set is dropped
+/// (its chunks and tiles not yet begun are skipped, its splats cleared), and the iterations
+/// before it stay in `film`. So a stop takes effect within a tile's time, whatever the image
+/// size, and each pixel keeps whole iterations only, which is what keeps the image unbiased.
+#[allow(clippy::too_many_arguments)]
+pub fn render_iterations_until(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    first: u32,
+    count: u32,
+    method: Method,
+    faults: Faults,
+    buffers: &mut LightPassBuffers,
+    film: &mut Film,
+    stop: &AtomicBool,
+) -> u64 {
     assert!(method.splats(), "{method} does not trace light subpaths");
     let n_paths = film.width * film.height;
     let mode = match method {
@@ -178,6 +239,9 @@ pub fn render_iterations(
     };
     let mut rays = 0u64;
     for s in first..first + count {
+        if stop.load(Ordering::SeqCst) {
+            break;
+        }
         // Merging's radius this iteration, and its constants in the MIS weights.
         let radius = if method.merges() {
             buffers.radius.at(s)
@@ -193,13 +257,21 @@ pub fn render_iterations(
             faults,
             n_paths,
             radius,
+            reach: buffers.radius.reach,
             merge: MergeMis::new(radius, n_paths, method),
+            stop,
         };
         rays += iteration.light_pass(mode, buffers);
-        if radius > 0.0 {
+        if !stop.load(Ordering::SeqCst) && radius > 0.0 {
             iteration.build_grid(buffers);
         }
         let results = iteration.camera_pass(buffers, film.width, film.height);
+        if stop.load(Ordering::SeqCst) {
+            // Stopped under way: the iteration is dropped, its splats with it.
+            buffers.splats.clear();
+            rays += results.iter().map(|(_, r)| r).sum::<u64>();
+            break;
+        }
         rays += add_iteration(film, results);
     }
     rays
@@ -216,9 +288,13 @@ struct Iteration<'a> {
     faults: Faults,
     /// N, the light subpaths of an iteration: one per pixel.
     n_paths: u32,
-    /// The merge radius of this iteration (0: no merging).
+    /// The largest merge radius of this iteration (0: no merging).
     radius: f32,
+    /// The view's reach (`MergeRadius::reach`).
+    reach: f32,
     merge: MergeMis,
+    /// A stop asked for: the chunks and tiles not yet begun are skipped.
+    stop: &'a AtomicBool,
 }
 
 impl Iteration<'_> {
@@ -244,6 +320,7 @@ impl Iteration<'_> {
             merge: self.merge,
             merges: self.radius > 0.0,
             radius: self.radius,
+            reach: self.reach,
             local_radius: self.local_radius(),
         };
         let chunks: Vec<(Vec<LightVertex>, Vec<u32>, u64)> = (0..n_paths.div_ceil(LIGHT_CHUNK))
@@ -251,6 +328,9 @@ impl Iteration<'_> {
             .map(|c| {
                 let mut vertices = Vec::new();
                 let mut ends = Vec::with_capacity(LIGHT_CHUNK as usize);
+                if self.stop.load(Ordering::Relaxed) {
+                    return (vertices, ends, 0);
+                }
                 let mut rays = 0;
                 let mut pending = Vec::new();
                 for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
@@ -313,6 +393,7 @@ impl Iteration<'_> {
             connects: method.connects(),
             merge,
             radius,
+            reach: self.reach,
             local_radius: self.local_radius(),
             photons: (radius > 0.0).then(|| {
                 debug_assert_eq!(buffers.records.len(), buffers.grid.entries.len());
@@ -327,6 +408,9 @@ impl Iteration<'_> {
         (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
             .map_init(bdpt::CameraTerms::default, |terms, t| {
+                if self.stop.load(Ordering::Relaxed) {
+                    return (Vec::new(), 0);
+                }
                 let (tx, ty) = (t % tiles_x, t / tiles_x);
                 let mut rays = 0;
                 // The tile's camera subpaths, their visibility rays traced together (at the end,

@@ -49,6 +49,10 @@ pub struct FilmIdentity {
     /// The merging methods' r_1 (scene units) and alpha, exactly as rendered.
     pub merge_radius: Option<f32>,
     pub merge_alpha: Option<f32>,
+    /// The view's reach up to which the merge radius grows with the distance from the camera
+    /// (`MergeRadius::reach`; absent where the radius is the same at every vertex).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merge_reach: Option<f32>,
     /// The scene file as given, and the SHA-1 of its bytes.
     pub scene: String,
     pub scene_sha1: String,
@@ -226,6 +230,7 @@ mod tests {
             light_samples: 1,
             merge_radius: Some(0.012_345_679),
             merge_alpha: Some(0.75),
+            merge_reach: Some(7.5),
             scene: "scenes/x.json".into(),
             scene_sha1: "0123".into(),
             render_seconds: 1.5,

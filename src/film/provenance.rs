@@ -17,12 +17,21 @@ pub fn bidirectional_provenance(
     ]
 }
 
-/// The merging methods' radius for a render's provenance: r_1 (scene units) and α.
+/// The merging methods' radius for a render's provenance: the largest r_1 (scene units), α,
+/// and the view's reach at which a camera vertex takes r_1 ("uniform" where every vertex does).
 pub fn merging_provenance(
     radius: &crate::transport::merging::MergeRadius,
 ) -> Vec<(&'static str, String)> {
     vec![
         ("merge_radius", format!("{:e}", radius.initial)),
         ("merge_alpha", format!("{}", radius.alpha)),
+        (
+            "merge_reach",
+            if radius.reach > 0.0 {
+                format!("{:e}", radius.reach)
+            } else {
+                "uniform".to_string()
+            },
+        ),
     ]
 }

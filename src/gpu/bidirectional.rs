@@ -204,10 +204,9 @@ impl Bidirectional {
             Method::Light => vec![false; pixels as usize],
             _ => crate::transport::subpath::specular_pixels(scene, camera),
         };
-        let specular_camera_subpaths = crate::transport::subpath::specular_camera_subpaths(
-            method,
-            MergeRadius::default_for(scene, method).initial,
-        );
+        let default_radius = MergeRadius::default_for(scene, camera, method);
+        let specular_camera_subpaths =
+            crate::transport::subpath::specular_camera_subpaths(method, default_radius.initial);
         let n_c = camera_radiance_lanes(&crate::transport::subpath::camera_subpaths(
             &specular,
             specular_camera_subpaths,
@@ -252,7 +251,7 @@ impl Bidirectional {
             scatter: pipeline("grid_scatter"),
             sort: pipeline("grid_sort"),
             query_check: pipeline("grid_query_check"),
-            radius: MergeRadius::default_for(scene, method),
+            radius: default_radius,
             grid_min: crate::transport::merging::scene_bounds(scene).0,
             ball_kernel,
         });

@@ -72,18 +72,17 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
 }
 
 /// The merge radius a render on this adapter takes by default, from `base` (the CPU backend's
-/// default, with any `--alpha`): a hardware GPU's share of the scene
-/// (`merging::HARDWARE_GPU_RADIUS_FACTOR`), since its renders run many more iterations; a
+/// default, with any `--alpha`): on a hardware GPU a share of it
+/// (`merging::HARDWARE_GPU_RADIUS_SCALE`), since its renders run many more iterations; a
 /// software adapter (lavapipe) keeps `base`.
 pub fn default_merge_radius(
     info: &wgpu::AdapterInfo,
-    scene: &crate::layout::FlatScene,
     base: crate::transport::merging::MergeRadius,
 ) -> crate::transport::merging::MergeRadius {
     if info.device_type == wgpu::DeviceType::Cpu {
         base
     } else {
-        base.for_hardware_gpu(scene)
+        base.for_hardware_gpu()
     }
 }
 

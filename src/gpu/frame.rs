@@ -77,7 +77,10 @@ pub struct Frame {
     /// r_i it leaves (`merging::CLEARANCE_FLOOR`).
     pub merges_within_clearance: u32,
     pub clearance_floor: f32,
-    pub pad0: u32,
+    /// The view's reach (`MergeRadius::reach`): a camera vertex this far from the eye or
+    /// farther merges within `merge_radius`, a nearer one within its share
+    /// (`merging::footprint_share`; 0: every vertex within `merge_radius`).
+    pub merge_reach: f32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
@@ -143,7 +146,7 @@ impl Frame {
             merges_within_clearance: (method.merges_within_clearance()
                 && !faults.merge_ignores_clearance) as u32,
             clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
-            pad0: 0,
+            merge_reach: 0.0,
             planar_mirrors: std::array::from_fn(|i| {
                 scene.planar_mirrors.get(i).copied().unwrap_or_default()
             }),
@@ -174,6 +177,11 @@ pub const MAX_PASS_SPP: u32 = 64;
 /// A dispatch should end within this time: drivers reset GPUs whose dispatches run for
 /// seconds (wgpu #2554), and lavapipe's run at most ~0.5 s this way.
 pub const TARGET_DISPATCH_SECONDS: f64 = 0.05;
+
+/// A pass (or iteration) expected to run longer than this looks at a stop between its
+/// dispatches, waiting for each (`GpuRenderer::stop_checked`): 0.25 s, the render loop's pass
+/// target, so that short passes keep the queue full.
+pub const STOP_LATENCY_SECONDS: f64 = 0.25;
 
 /// Words of one tally cell (`CELL_WORDS` in `shaders/splat.wgsl`).
 pub(super) const CELL_WORDS: u64 = 8;

@@ -4,6 +4,7 @@
 use super::Backend;
 use crate::film::provenance::{bidirectional_provenance, merging_provenance};
 use crate::film::{check_film_for, Film};
+use std::sync::atomic::AtomicBool;
 
 /// The CPU backend as a [`Backend`], on a rayon pool of its own.
 pub struct CpuBackend<'a> {
@@ -71,27 +72,36 @@ impl Backend for CpuBackend<'_> {
         out
     }
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+        self.pass_until(first, count, film, &AtomicBool::new(false))
+    }
+    fn pass_until(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
         let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
         let light_samples = self.light_samples;
         let method = self.method;
         if method.splats() {
             check_film_for(method, film)?;
             let radius = self.radius.unwrap_or_else(|| {
-                crate::transport::merging::MergeRadius::default_for(scene, method)
+                crate::transport::merging::MergeRadius::default_for(scene, camera, method)
             });
             let buffers = self.buffers.get_or_insert_with(|| {
                 crate::cpu::LightPassBuffers::new(scene, camera, method, radius)
             });
             self.rays += self.pool.install(|| {
-                crate::cpu::render_iterations(
-                    scene, camera, seed, first, count, method, faults, buffers, film,
+                crate::cpu::render_iterations_until(
+                    scene, camera, seed, first, count, method, faults, buffers, film, stop,
                 )
             });
             return Ok(());
         }
         check_film_for(method, film)?;
         self.rays += self.pool.install(|| {
-            crate::cpu::render_pass(
+            crate::cpu::render_pass_until(
                 scene,
                 camera,
                 seed,
@@ -100,6 +110,7 @@ impl Backend for CpuBackend<'_> {
                 light_samples,
                 faults,
                 film,
+                stop,
             )
         });
         Ok(())

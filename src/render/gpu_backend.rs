@@ -3,6 +3,7 @@
 use super::Backend;
 use crate::film::Film;
 use crate::gpu::GpuRenderer;
+use std::sync::atomic::AtomicBool;
 
 /// The GPU renderer as a [`Backend`].
 pub struct GpuBackend {
@@ -19,6 +20,15 @@ impl Backend for GpuBackend {
     }
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         self.renderer.render(first, count, film)
+    }
+    fn pass_until(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
+        self.renderer.render_until(first, count, film, stop)
     }
     fn provenance(&self) -> Vec<(&'static str, String)> {
         self.renderer.provenance()

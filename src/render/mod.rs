@@ -19,6 +19,19 @@ pub trait Backend {
     /// The device it runs on, for logs and metadata.
     fn device(&self) -> String;
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()>;
+    /// [`Backend::pass`] until `stop` is set: a backend that can stop under way adds only the
+    /// samples it finished whole (each pixel as many) and returns early; the caller reads how
+    /// many from the film. By default the whole pass.
+    fn pass_until(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
+        let _ = stop;
+        self.pass(first, count, film)
+    }
     /// What the method chose or met that an image's provenance should say (`key`, value), for
     /// the EXR metadata and the log.
     fn provenance(&self) -> Vec<(&'static str, String)> {
@@ -56,7 +69,8 @@ pub struct RenderReport {
 const TARGET_PASS_SECONDS: f64 = 0.25;
 
 /// Runs passes until the budget is spent, `stop` is set or the backend fails; the samples of
-/// every completed pass stay in `film` in all cases. `on_pass(film, spp_done, elapsed)` is
+/// every completed pass stay in `film` in all cases, and of a pass that `stop` cuts short, those
+/// the backend finished whole ([`Backend::pass_until`]). `on_pass(film, spp_done, elapsed)` is
 /// called after each pass (progress, checkpoints).
 pub fn render_progressive(
     backend: &mut dyn Backend,
@@ -97,8 +111,18 @@ pub fn render_progressive(
             count = count.min(t - done);
         }
         let t0 = Instant::now();
-        if let Err(e) = backend.pass(done, count, film) {
+        let before = film.spp();
+        if let Err(e) = backend.pass_until(done, count, film, stop) {
             break StopReason::Failed(format!("{e:#}"));
+        }
+        let added = (film.spp() - before) as u32;
+        if added < count {
+            // Stopped under way: the samples finished whole are kept.
+            done += added;
+            if added > 0 {
+                on_pass(film, done, start.elapsed().as_secs_f64());
+            }
+            break StopReason::Interrupted;
         }
         let dt = t0.elapsed().as_secs_f64();
         // The first pass includes warm-up (thread pool start, shader compilation): measure

@@ -4,10 +4,18 @@
 //! vertex), `wi` toward where it comes from. A sample's `weight` is f · |cos θi| / pdf, the factor
 //! by which the path throughput changes.
 
-use crate::layout::{Material, KIND_GLASS, KIND_MIRROR};
+use crate::layout::{Material, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR};
 use crate::math::sampling::{orthonormal_basis, sample_cosine_hemisphere};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
+
+/// Whether a material scatters diffusely (Lambert): diffuse surfaces, and emitters that also
+/// reflect. Only such vertices can be connected.
+#[inline]
+pub fn is_diffuse(material: &Material) -> bool {
+    material.kind == KIND_DIFFUSE
+        || (material.kind == KIND_EMITTER && Vec3::from(material.color).max_element() > 0.0)
+}
 
 /// Unpolarised Fresnel reflectance of a smooth dielectric boundary (exact, not Schlick's
 /// approximation): the mean of the s- and p-polarised reflectances (pbrt-v4 eq. 9.6), with

@@ -14,128 +14,249 @@
 //! converges with both going to 0. The schedule depends only on the iteration index, so passes,
 //! threads, backends and resumption all merge within the same radii.
 
-use crate::layout::FlatScene;
+use crate::accel::bvh::intersect_closest;
+use crate::layout::{FlatScene, KIND_GLASS, KIND_MIRROR};
+use crate::math::geometry::{offset_ray_origin, Ray};
+use crate::transport::bsdf::{is_diffuse, reflect, refract};
+use crate::transport::camera::Camera;
+use crate::transport::method::Method;
+use glam::Vec3;
 
-/// The default initial radius of `sppm` and `vcm-full` as a share of the scene's bounding-sphere
-/// radius (half the diagonal of its bounding box): 0.01, at every image size. Scene-relative, as
-/// SmallVCM's `-r` is: merging's bias is set by the disk's size in the scene, not in pixels. The
-/// caustics of the rooms with mirrors and glass want a wider disk, the Cornell box (no specular
-/// surface, so merging only adds its bias there) a narrower one. At 0.01 instead of SmallVCM's
-/// 0.003, sppm's relMSE (the references' noise subtracted) is 0.15, 0.16 and 0.13 of 0.003's on
-/// tncg15_room, glass_room and cornell_box, and that of Georgiev's VCM (`vcm-full`) 0.77, 0.84
-/// and 1.10 (CPU, 256x256, 30 s; `METHOD=sppm benches/merge_radius.sh`, `METHOD=vcm-full`). The
-/// wider disk pays less as the iterations grow: the squared bias falls as n^(2α − 2), the
-/// variance as n^−α, so renders of thousands of iterations are better served by
-/// [`HARDWARE_GPU_RADIUS_FACTOR`] or a smaller `--alpha`. The measurements, and why the radius
-/// does not scale with the image size: docs/journal/2026-11-27_merge_radius.md.
-pub const DEFAULT_RADIUS_FACTOR: f32 = 0.01;
+// What sets the radius. Merging's bias is set by the disk's size in the scene where it lies,
+// and what the image can resolve there is set by how far that is from the camera: a disk a
+// fixed share of the view wide at a camera vertex x is
+//
+//   r_i(x) = k · tan(θ/2) · t(x) · i^((α − 1) / 2),
+//
+// with θ the vertical field of view and t(x) the distance along the camera subpath from the eye
+// to x (through any mirrors and glass before it). Nothing the camera does not see enters it, and
+// it scales with the scene. The share k does not depend on the image's size in pixels: a radius
+// a few pixels wide would widen the disk in the scene as the image shrinks, and merging's bias
+// with it (docs/journal/2026-11-27_merge_radius.md measured that and refuted it).
+//
+// The hash grid needs a largest radius per iteration: the radius at the view's reach T
+// ([`view_reach`]), the distance that half of the view's first diffuse vertices lie within.
+// Farther vertices merge within that largest radius, r_i(x) = r_i(T). So a render's
+// radius is r_i (the largest, [`MergeRadius::at`]) and T ([`MergeRadius::reach`]); each
+// vertex's is r_i · min(t(x) / T, 1) ([`footprint_share`]), limited further by the vertex's
+// clearance in vcm ([`merge_share`]).
 
-/// The merge radius's default on a hardware GPU, as a share of the scene's bounding-sphere
-/// radius: 0.003. Such a GPU runs tens to hundreds of times the iterations of the CPU backend in
-/// the same time, so its renders are long in iterations, and in long renders the squared bias of
-/// a wide disk outlasts the variance it saves (see [`DEFAULT_RADIUS_FACTOR`]). On an NVIDIA H200
-/// at 512x512 in 4 s (1200 – 2300 iterations), vcm's relMSE (the references' noise subtracted)
-/// at 0.003 is 0.28, 0.24 and 0.21 of that at 0.01 on tncg15_room, glass_room and cornell_box
-/// (docs/records/2026-11-27_h200/first_diffuse_radius_512.txt). A software adapter (lavapipe)
-/// runs about as many iterations as the CPU backend and keeps [`DEFAULT_RADIUS_FACTOR`].
-pub const HARDWARE_GPU_RADIUS_FACTOR: f32 = 0.003;
+/// k for `vcm` (which merges within each vertex's clearance, [`local_radius`]): 0.036, a disk
+/// at the view's reach 0.018 of the view's height there (the height is 2 tan(θ/2) T). On the
+/// reference scenes at 256x256 in 20 s on the CPU, vcm's relMSE (the references' noise
+/// subtracted) summed over seeds 14 – 16 is 1.03, 0.98 and 0.85 of that at the default before
+/// the radius followed the view (0.03 of the scene's bounding-sphere radius at every vertex) on
+/// tncg15_room, glass_room and cornell_box; 0.031 gave 1.07, 0.90 and 0.85, and (seeds 12 and
+/// 13) the same 0.031 with one radius at every vertex (no share by distance) 0.98, 1.04 and
+/// 0.98 (docs/journal/2026-11-28_view_radius.md). Where surfaces meet, a disk that reaches across the
+/// edge counts the photons of the wrong surface and misses the light behind it; within the
+/// clearance that bias is gone, and the flat walls bear a wide disk
+/// (docs/journal/2026-11-27_clearance.md).
+pub const VCM_VIEW_SHARE: f32 = 0.036;
 
-/// The default initial radius of `vcm`, which merges within each vertex's clearance
-/// ([`local_radius`]), as a share of the scene's bounding-sphere radius: 0.03 (the other merging
-/// methods keep [`DEFAULT_RADIUS_FACTOR`]). Where surfaces meet, a disk that reaches across the
-/// edge counts the photons of the wrong surface and misses the light behind it: at 0.02 of the
-/// scene radius on tncg15_room, 89 % of the squared bias (in 4x4-pixel blocks) lay in 5 % of
-/// the image, the room's edges and outlines. Within the clearance that bias is gone, and the
-/// flat walls bear a disk three times as wide: on tncg15_room vcm's relMSE at 0.03 within the
-/// clearance (floor 0.1) is 2.2e-4, against 6.1e-4 at 0.01 everywhere (CPU, 256x256, 30 s,
-/// seeds 11 and 12). The radii and floors measured: docs/journal/2026-11-27_clearance.md.
-pub const VCM_RADIUS_FACTOR: f32 = 0.03;
+/// k for `sppm` and `vcm-full`: a third of [`VCM_VIEW_SHARE`], as 0.01 of the scene radius was
+/// a third of vcm's 0.03 when the radius was a share of the scene's bounds. Their disks do not
+/// stop at the clearance, and SPPM's relMSE at 0.01 of the scene radius was 0.13 – 0.16 of
+/// 0.003's (CPU, 256x256, 30 s; docs/journal/2026-11-27_merge_radius.md).
+pub const DEFAULT_VIEW_SHARE: f32 = VCM_VIEW_SHARE / 3.0;
+
+/// The share of a radius that a hardware GPU takes by default: 0.3. Such a GPU runs tens to
+/// hundreds of times the iterations of the CPU backend in the same time, and in long renders
+/// the squared bias of a wide disk outlasts the variance it saves. On an NVIDIA H200 at 512x512
+/// in 4 s (1200 – 2300 iterations), vcm's relMSE (the references' noise subtracted) at 0.3 of
+/// the CPU's radius was 0.28, 0.24 and 0.21 of that at the CPU's on tncg15_room, glass_room and
+/// cornell_box (docs/records/2026-11-27_h200/first_diffuse_radius_512.txt, when both were shares
+/// of the scene's bounds). A software adapter (lavapipe) runs about as many iterations as the CPU
+/// backend and keeps the CPU's radius.
+pub const HARDWARE_GPU_RADIUS_SCALE: f32 = 0.3;
 
 /// The least share of the iteration's radius that [`local_radius`] gives a vertex near another
-/// surface: 0.1 (measured with [`VCM_RADIUS_FACTOR`]). Without one, merges at an edge would
-/// shrink to nothing; the MIS weights then give those paths to the connections, which is right
-/// for most, but the paths that only merging samples (a caustic seen in a mirror) would grow
-/// noisy there.
+/// surface: 0.1 (measured with vcm's radius a share of the scene's bounds). Without one, merges
+/// at an edge would shrink to nothing; the MIS weights then give those paths to the connections,
+/// which is right for most, but the paths that only merging samples (a caustic seen in a mirror)
+/// would grow noisy there.
 pub const CLEARANCE_FLOOR: f32 = 0.1;
+
+/// The least share of the iteration's radius that [`footprint_share`] gives a vertex near the
+/// camera: 0.01, so that the MIS constants of a vertex at the lens (η^−β grows as the fourth power
+/// of the share's inverse) stay far inside f32.
+pub const FOOTPRINT_FLOOR: f32 = 0.01;
 
 /// The default α: SmallVCM's and Knaus and Zwicker's 0.75.
 pub const DEFAULT_ALPHA: f32 = 0.75;
 
-/// The merge radius of a render: r_1 in scene units and α.
+/// Rays per side of the grid over the image that [`view_reach`] traces.
+pub const VIEW_PROBE_RAYS: u32 = 32;
+
+/// The share of the probe's first diffuse vertices that lie within the view's reach: 0.5, the
+/// median. At 0.9 (with k = 0.03) most of the image merged within less than the radius at the
+/// reach, and vcm's relMSE on tncg15_room was 1.12 – 1.21 of the scene-bound radius's (seeds
+/// 11 – 13); the median keeps the nearer half of the view alone merging within less.
+pub const VIEW_REACH_QUANTILE: f64 = 0.5;
+
+/// Mirror and glass bounces [`view_reach`] follows to a diffuse vertex.
+const VIEW_PROBE_BOUNCES: u32 = 16;
+
+/// The merge radius of a render: its largest radius r_1 in scene units, α, and the view's reach
+/// T at which a vertex takes the largest radius (0: every vertex takes it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MergeRadius {
     pub initial: f32,
     pub alpha: f32,
+    pub reach: f32,
 }
 
 impl MergeRadius {
-    /// The radius of iteration `iteration` (counted from 0, so the first is r_1).
+    /// The same radius r_1 at every vertex (`--radius`).
+    pub fn uniform(initial: f32, alpha: f32) -> MergeRadius {
+        MergeRadius {
+            initial,
+            alpha,
+            reach: 0.0,
+        }
+    }
+
+    /// The largest radius of iteration `iteration` (counted from 0, so the first is r_1).
     #[inline]
     pub fn at(&self, iteration: u32) -> f32 {
         let i = iteration as f64 + 1.0;
         (self.initial as f64 * i.powf((self.alpha as f64 - 1.0) * 0.5)) as f32
     }
 
-    /// The default of `method` for a scene: [`VCM_RADIUS_FACTOR`] (vcm) or
-    /// [`DEFAULT_RADIUS_FACTOR`] (sppm, vcm-full) of its bounding-sphere radius, α =
-    /// [`DEFAULT_ALPHA`].
-    pub fn default_for(scene: &FlatScene, method: crate::transport::method::Method) -> MergeRadius {
-        let factor = if method.merges_within_clearance() {
-            VCM_RADIUS_FACTOR
+    /// The default of `method` for what `camera` sees of `scene`: the disk k · tan(θ/2) · t(x)
+    /// wide ([`VCM_VIEW_SHARE`] for vcm, [`DEFAULT_VIEW_SHARE`] for sppm and vcm-full) up to the
+    /// view's reach T ([`view_reach`]), α = [`DEFAULT_ALPHA`]. vcm-full merges within the radius
+    /// at T at every vertex: its paths may merge at any of their diffuse vertices, and their MIS
+    /// weights carry one η for all of them (`crate::transport::subpath`, "A radius of the
+    /// vertex"); vcm's and SPPM's merge at their camera subpath's first diffuse vertex alone.
+    pub fn default_for(scene: &FlatScene, camera: &Camera, method: Method) -> MergeRadius {
+        let k = if method.merges_within_clearance() {
+            VCM_VIEW_SHARE
         } else {
-            DEFAULT_RADIUS_FACTOR
+            DEFAULT_VIEW_SHARE
         };
-        MergeRadius::of_scene(scene, factor)
-    }
-
-    /// r_1 at `factor` of `scene`'s bounding-sphere radius, α = [`DEFAULT_ALPHA`].
-    pub fn of_scene(scene: &FlatScene, factor: f32) -> MergeRadius {
+        let reach = view_reach(scene, camera);
         MergeRadius {
-            initial: factor * scene_radius(scene),
+            initial: k * Vec3::from(camera.up).length() * reach,
             alpha: DEFAULT_ALPHA,
+            reach: if method == Method::VcmFull {
+                0.0
+            } else {
+                reach
+            },
         }
     }
 
-    /// This radius with r_1 at the hardware GPU's default share of `scene`'s bounding-sphere
-    /// radius ([`HARDWARE_GPU_RADIUS_FACTOR`]), α kept.
-    pub fn for_hardware_gpu(self, scene: &FlatScene) -> MergeRadius {
+    /// This radius at [`HARDWARE_GPU_RADIUS_SCALE`] of r_1, α and the reach kept.
+    pub fn for_hardware_gpu(self) -> MergeRadius {
         MergeRadius {
-            alpha: self.alpha,
-            ..MergeRadius::of_scene(scene, HARDWARE_GPU_RADIUS_FACTOR)
+            initial: self.initial * HARDWARE_GPU_RADIUS_SCALE,
+            ..self
         }
     }
 }
 
+/// The view's reach T: the distance along the camera subpath to the first diffuse vertex
+/// (through mirrors and glass, glass refracting where it can) that [`VIEW_REACH_QUANTILE`] of the
+/// rays through a [`VIEW_PROBE_RAYS`]² grid over the image lie within. A function of what the
+/// camera sees alone, in scene units; the scene's bounding-sphere radius where no probe ray meets
+/// a diffuse surface (the image is then black or shows emitters only).
+pub fn view_reach(scene: &FlatScene, camera: &Camera) -> f32 {
+    let n = VIEW_PROBE_RAYS;
+    let mut depths = Vec::with_capacity((n * n) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let sx = 2.0 * (i as f32 + 0.5) / n as f32 - 1.0;
+            let sy = 1.0 - 2.0 * (j as f32 + 0.5) / n as f32;
+            let d = Vec3::from(camera.forward)
+                + sx * Vec3::from(camera.right)
+                + sy * Vec3::from(camera.up);
+            let ray = Ray {
+                o: Vec3::from(camera.eye),
+                d: d.normalize(),
+            };
+            depths.extend(first_diffuse_depth(scene, ray));
+        }
+    }
+    if depths.is_empty() {
+        return scene_radius(scene);
+    }
+    depths.sort_by(f32::total_cmp);
+    let k = ((depths.len() as f64 * VIEW_REACH_QUANTILE).ceil() as usize).clamp(1, depths.len());
+    depths[k - 1]
+}
+
+/// The distance along `ray` and the mirror and glass bounces after it to the first diffuse
+/// vertex, or None if it leaves the scene or bounces too often first.
+fn first_diffuse_depth(scene: &FlatScene, mut ray: Ray) -> Option<f32> {
+    let mut depth = 0.0;
+    for _ in 0..VIEW_PROBE_BOUNCES {
+        let hit = intersect_closest(scene, &ray, f32::MAX)?;
+        depth += hit.t;
+        let material = &scene.materials[hit.material as usize];
+        let wo = -ray.d;
+        let wi = match material.kind {
+            KIND_MIRROR => reflect(wo, hit.n),
+            KIND_GLASS => match refract(wo, hit.n, material.ior) {
+                Some((wt, _)) => wt,
+                None => reflect(wo, hit.n),
+            },
+            // A diffuse vertex ends the camera subpath's way to its first merge; a black
+            // emitter ends the subpath.
+            _ => return is_diffuse(material).then_some(depth),
+        };
+        ray = Ray {
+            o: offset_ray_origin(hit.p, hit.p_err, hit.n, wi),
+            d: wi,
+        };
+    }
+    None
+}
+
+/// A camera vertex's share of the iteration's largest radius by its distance `t` along the
+/// camera subpath: min(t / `reach`, 1), at least [`FOOTPRINT_FLOOR`]; 1 where the radius is
+/// uniform (`reach` 0).
+#[inline]
+pub fn footprint_share(t: f32, reach: f32) -> f32 {
+    if reach <= 0.0 {
+        return 1.0;
+    }
+    (t / reach).clamp(FOOTPRINT_FLOOR, 1.0)
+}
+
 /// The merge radius at a camera vertex `p` on primitive `prim` of an iteration that merges within
-/// `radius` (`vcm`, [`crate::transport::method::Method::merges_within_clearance`]): the vertex's
-/// clearance (`crate::transport::clearance`), at most `radius` and at least [`CLEARANCE_FLOOR`] of
-/// it. Within its clearance the disk lies on the vertex's own plane in front of every other
-/// surface, so the merge is free of the bias where surfaces meet (the room's edges, an emitter's
-/// outline, what stands on the floor), which held most of merging's bias (see
-/// [`VCM_RADIUS_FACTOR`]). The schedule still shrinks it over iterations: consistent as before.
-pub fn local_radius(scene: &FlatScene, p: glam::Vec3, prim: u32, radius: f32) -> f32 {
+/// `radius` (`vcm`, [`Method::merges_within_clearance`]): the vertex's clearance
+/// (`crate::transport::clearance`), at most `radius` and at least [`CLEARANCE_FLOOR`] of it.
+/// Within its clearance the disk lies on the vertex's own plane in front of every other surface,
+/// so the merge is free of the bias where surfaces meet (the room's edges, an emitter's outline,
+/// what stands on the floor), which held most of merging's bias (see [`VCM_VIEW_SHARE`]). The
+/// schedule still shrinks it over iterations: consistent as before.
+pub fn local_radius(scene: &FlatScene, p: Vec3, prim: u32, radius: f32) -> f32 {
     crate::transport::clearance::clearance(scene, p, prim, radius).max(CLEARANCE_FLOOR * radius)
 }
 
 /// The merge radius at camera vertex `p` on primitive `prim` as a share of the iteration's
-/// `radius`: [`local_radius`] / `radius` where the method merges `within_clearance`, else 1.
-/// Every strategy of a path through the vertex weighs the merge there with this radius
-/// (`MergeMis::within`; `crate::transport::subpath`, "A radius of the vertex").
+/// largest `radius`: the vertex's `footprint` ([`footprint_share`]) of it, limited by the
+/// clearance ([`local_radius`]) where the method merges `within_clearance`. Every strategy of a
+/// path through the vertex weighs the merge there with this radius (`MergeMis::within`;
+/// `crate::transport::subpath`, "A radius of the vertex").
 pub fn merge_share(
     scene: &FlatScene,
-    p: glam::Vec3,
+    p: Vec3,
     prim: u32,
     radius: f32,
+    footprint: f32,
     within_clearance: bool,
 ) -> f32 {
     if !within_clearance {
-        return 1.0;
+        return footprint;
     }
-    // Where the clearance reaches the radius the share is 1 exactly, on both backends: WGSL's
-    // division need not give r / r = 1 (shaders/merging.wgsl, the same step).
-    let local = local_radius(scene, p, prim, radius);
-    if local >= radius {
-        1.0
+    let own = footprint * radius;
+    // Where the clearance reaches the radius the share is the footprint exactly, on both
+    // backends: WGSL's division need not give r / r = 1 (shaders/merging.wgsl, the same step).
+    let local = local_radius(scene, p, prim, own);
+    if local >= own {
+        footprint
     } else {
         local / radius
     }
@@ -189,13 +310,20 @@ mod tests {
 
     #[test]
     fn the_radius_shrinks_as_the_schedule_says() {
-        let r = MergeRadius {
-            initial: 2.0,
-            alpha: 0.75,
-        };
+        let r = MergeRadius::uniform(2.0, 0.75);
         assert_eq!(r.at(0), 2.0);
         // r_4 = r_1 · 4^(−1/8).
         assert!((r.at(3) - 2.0 * 4f32.powf(-0.125)).abs() < 1e-6);
         assert!(r.at(100) < r.at(99));
+    }
+
+    #[test]
+    fn a_vertex_merges_within_its_share_of_the_largest_radius_by_distance() {
+        // Half way to the reach: half the radius; past it, all of it; at the eye, the floor.
+        assert_eq!(footprint_share(5.0, 10.0), 0.5);
+        assert_eq!(footprint_share(30.0, 10.0), 1.0);
+        assert_eq!(footprint_share(0.0, 10.0), FOOTPRINT_FLOOR);
+        // A uniform radius (reach 0) is all of it everywhere.
+        assert_eq!(footprint_share(0.5, 0.0), 1.0);
     }
 }

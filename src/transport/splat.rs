@@ -96,6 +96,16 @@ impl Splats {
         let overflow = cell.overflow.swap(0, Ordering::Relaxed) != 0;
         (!overflow).then(|| Vec3::from(rgb))
     }
+
+    /// Every cell cleared: what an iteration stopped before its end leaves is dropped.
+    pub fn clear(&self) {
+        for cell in &self.cells {
+            for c in &cell.rgb {
+                c.store(0, Ordering::Relaxed);
+            }
+            cell.overflow.store(0, Ordering::Relaxed);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -360,3 +360,14 @@ pub fn pixels_differing(a: &Film, b: &Film, tol: f64) -> (usize, f64) {
     }
     (count, worst)
 }
+
+/// The default merge radius of `method` for a square image of the scene at `rel`
+/// (`MergeRadius::default_for`; the view's reach depends on the image's aspect, not its size).
+pub fn default_radius(
+    rel: &str,
+    method: hexray::transport::method::Method,
+) -> hexray::transport::merging::MergeRadius {
+    let (scene, flat) = load(rel);
+    let camera = hexray::transport::camera::Camera::new(&scene.desc.camera, 1, 1);
+    hexray::transport::merging::MergeRadius::default_for(&flat, &camera, method)
+}

@@ -155,7 +155,7 @@ impl<'a> Render<'a> {
         if self.method.splats() {
             let radius = self
                 .radius
-                .unwrap_or_else(|| MergeRadius::default_for(&flat, self.method));
+                .unwrap_or_else(|| MergeRadius::default_for(&flat, &camera, self.method));
             let mut buffers = LightPassBuffers::new(&flat, &camera, self.method, radius);
             render_iterations(
                 &flat,
@@ -190,6 +190,40 @@ impl<'a> Render<'a> {
         let mut film = Film::new(self.width, self.height);
         r.render(0, self.spp, &mut film).unwrap();
         film
+    }
+
+    /// The film after `spp` samples asked of `backend` with a stop set `after` into them
+    /// (`Backend::pass_until`), then the rest asked with no stop: what a stop under way leaves,
+    /// and what the render goes on from. Returns the film and the samples the stopped pass kept.
+    pub fn stopped_under_way(&self, backend: Backend, after: std::time::Duration) -> (Film, u32) {
+        use hexray::render::{CpuBackend, GpuBackend};
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let (scene, flat) = self.loaded();
+        let camera = self.camera(&scene);
+        let mut target: Box<dyn hexray::render::Backend> = match backend {
+            Backend::Cpu => {
+                let mut b = CpuBackend::new(&flat, camera, self.seed, 2).unwrap();
+                b.method = self.method;
+                b.radius = self.radius;
+                Box::new(b)
+            }
+            Backend::Gpu => Box::new(GpuBackend {
+                renderer: self.gpu_renderer(),
+                adapter: String::new(),
+            }),
+        };
+        let mut film = Film::new(self.width, self.height);
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                std::thread::sleep(after);
+                stop.store(true, Ordering::SeqCst);
+            });
+            target.pass_until(0, self.spp, &mut film, &stop).unwrap();
+        });
+        let kept = film.spp() as u32;
+        target.pass(kept, self.spp - kept, &mut film).unwrap();
+        (film, kept)
     }
 
     /// A GPU renderer of the scene (with the merge radius schedule, if one is set), for tests
@@ -230,7 +264,7 @@ impl<'a> Render<'a> {
                 let camera = self.camera(&scene);
                 let radius = self
                     .radius
-                    .unwrap_or_else(|| MergeRadius::default_for(&flat, self.method));
+                    .unwrap_or_else(|| MergeRadius::default_for(&flat, &camera, self.method));
                 let mut buffers = LightPassBuffers::new(&flat, &camera, self.method, radius);
                 (0..self.spp)
                     .map(|i| {

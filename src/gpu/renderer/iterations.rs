@@ -17,6 +17,7 @@ use crate::transport::method::Method;
 use crate::transport::subpath::LightVertex;
 use crate::transport::subpath::MergeMis;
 use anyhow::{bail, Result};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 impl GpuRenderer {
@@ -66,18 +67,22 @@ impl GpuRenderer {
 
     /// One pass of light tracing or BDPT: iterations `first..first + count` (at most
     /// MAX_PASS_SPP), and again those whose waves overflowed the vertex pool, until every one
-    /// has landed in the film.
+    /// has landed in the film; false if `stop` cut it short (the run under way is not folded).
     pub(super) fn pass_bidirectional(
         &mut self,
         first: u32,
         count: u32,
         film: &mut Film,
-    ) -> Result<()> {
+        stop: &AtomicBool,
+    ) -> Result<bool> {
         let mut pending: Vec<u32> = (first..first + count).collect();
         while !pending.is_empty() {
-            pending = self.run_iterations(&pending, film)?;
+            match self.run_iterations(&pending, film, stop)? {
+                Some(overflowed) => pending = overflowed,
+                None => return Ok(false),
+            }
         }
-        Ok(())
+        Ok(true)
     }
 
     /// With the `stage-times` feature, waits for the GPU and charges the time since the last
@@ -288,8 +293,16 @@ impl GpuRenderer {
     }
 
     /// Runs the light pass over subpaths `origin..origin + count`, in dispatches of about
-    /// `paths_per_dispatch`.
-    fn light_dispatches(&self, frame: &Frame, origin: u32, count: u32) {
+    /// `paths_per_dispatch`; with `checked`, each waited for and `stop` looked at before the
+    /// next (false if it was set).
+    fn light_dispatches(
+        &self,
+        frame: &Frame,
+        origin: u32,
+        count: u32,
+        stop: &AtomicBool,
+        checked: bool,
+    ) -> bool {
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
         let per = (self
             .paths_per_dispatch
@@ -307,11 +320,25 @@ impl GpuRenderer {
             };
             self.dispatch(&b.light_pipeline, &f, (n.div_ceil(LIGHT_WORKGROUP), 1));
             a += n;
+            if self.stop_seen(stop, checked) {
+                return false;
+            }
         }
+        true
     }
 
-    /// Runs `pipeline` over rows `y0..y1`, in bands of about `paths_per_dispatch` pixels.
-    fn row_dispatches(&self, pipeline: &wgpu::ComputePipeline, frame: &Frame, y0: u32, y1: u32) {
+    /// Runs `pipeline` over rows `y0..y1`, in bands of about `paths_per_dispatch` pixels; with
+    /// `checked`, each waited for and `stop` looked at before the next (false if it was set).
+    #[allow(clippy::too_many_arguments)]
+    fn row_dispatches(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        frame: &Frame,
+        y0: u32,
+        y1: u32,
+        stop: &AtomicBool,
+        checked: bool,
+    ) -> bool {
         let w = frame.camera.width;
         let rows =
             ((self.paths_per_dispatch / w as u64).max(1) as u32).div_ceil(WORKGROUP) * WORKGROUP;
@@ -329,12 +356,22 @@ impl GpuRenderer {
                 (w.div_ceil(WORKGROUP), band.div_ceil(WORKGROUP)),
             );
             y += band;
+            if self.stop_seen(stop, checked) {
+                return false;
+            }
         }
+        true
     }
 
     /// Traces the given iterations (one slot each) and folds those that landed into the film;
-    /// returns those that a wave overflowed, after enlarging what needs to be enlarged.
-    fn run_iterations(&mut self, iterations: &[u32], film: &mut Film) -> Result<Vec<u32>> {
+    /// returns those that a wave overflowed, after enlarging what needs to be enlarged, or None
+    /// where `stop` cut the run short (nothing of it folded).
+    fn run_iterations(
+        &mut self,
+        iterations: &[u32],
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> Result<Option<Vec<u32>>> {
         self.check_device()?;
         let start = Instant::now();
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
@@ -353,6 +390,8 @@ impl GpuRenderer {
             ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, b.band_rows)
         };
 
+        // An iteration costs about three path-traced samples (light, camera and connections).
+        let checked = self.stop_checked(pixels, 3 * iterations.len() as u32);
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(
             &b.tallies,
@@ -365,7 +404,9 @@ impl GpuRenderer {
         // Film bands: the image, unless its tallies are larger than one binding. Every band
         // traces every light subpath of the iteration (splatting only into the band), so each
         // band's pixels get the whole estimate, and the iteration's image sum gathers all bands.
-        self.for_each_film_band(film, b.band_rows, |band_start, band_end| {
+        let finished = self.for_each_film_band(film, b.band_rows, |band_start, band_end| {
+            // Only the first band may stop: later bands would leave rows of the run folded.
+            let checked = checked && band_start == 0;
             if b.band_rows < h {
                 let a = (band_start * w) as usize;
                 let z = (band_end * w) as usize;
@@ -389,6 +430,7 @@ impl GpuRenderer {
                     camera_goes_on: merge.camera_goes_on as u32,
                     merge_normalization: normalization,
                     merge_radius: radius,
+                    merge_reach: b.merging.as_ref().map_or(0.0, |m| m.radius.reach),
                     merges_within_clearance: self.frame.merges_within_clearance
                         & (radius > 0.0) as u32,
                     film_row: band_start,
@@ -411,23 +453,46 @@ impl GpuRenderer {
                     let mut encoder = self.device.create_command_encoder(&Default::default());
                     encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(band_pixels), Some(4));
                     self.queue.submit([encoder.finish()]);
-                    self.light_dispatches(&wave, y * w, (y1 - y) * w);
+                    if !self.light_dispatches(&wave, y * w, (y1 - y) * w, stop, checked) {
+                        return false;
+                    }
                     self.mark("light");
                     if let Some(camera) = &b.camera_pipeline {
-                        if merging {
+                        let (a, z) = if merging {
                             self.build_grid(&wave, radius);
-                            self.row_dispatches(camera, &wave, band_start, band_end);
-                        } else if y.max(band_start) < y1.min(band_end) {
-                            self.row_dispatches(camera, &wave, y.max(band_start), y1.min(band_end));
+                            (band_start, band_end)
+                        } else {
+                            (y.max(band_start), y1.min(band_end))
+                        };
+                        if a < z && !self.row_dispatches(camera, &wave, a, z, stop, checked) {
+                            return false;
                         }
                         self.mark("camera");
                     }
                     y = y1;
                 }
-                self.row_dispatches(&b.resolve_pipeline, &frame, band_start, band_end);
+                let never = AtomicBool::new(false);
+                self.row_dispatches(
+                    &b.resolve_pipeline,
+                    &frame,
+                    band_start,
+                    band_end,
+                    &never,
+                    false,
+                );
                 self.mark("resolve");
             }
+            true
         })?;
+        if !finished {
+            // The dropped iteration's splats are not resolved, so they are cleared here: the
+            // next iteration starts from empty cells, as after a resolve.
+            let b = self.bidirectional.as_ref().expect("light subpath buffers");
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&b.tallies, 0, Some(4 * image_cells_word(band_pixels)));
+            self.queue.submit([encoder.finish()]);
+            return Ok(None);
+        }
 
         // Read back the iterations' image cells.
         let mut encoder = self.device.create_command_encoder(&Default::default());
@@ -497,6 +562,6 @@ impl GpuRenderer {
             self.paths_per_dispatch =
                 ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
         }
-        Ok(overflowed)
+        Ok(Some(overflowed))
     }
 }

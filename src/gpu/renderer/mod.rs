@@ -4,7 +4,9 @@
 mod iterations;
 
 use super::bidirectional::Bidirectional;
-use super::frame::{Frame, PixelSums, MAX_PASS_SPP, TARGET_DISPATCH_SECONDS, WORKGROUP};
+use super::frame::{
+    Frame, PixelSums, MAX_PASS_SPP, STOP_LATENCY_SECONDS, TARGET_DISPATCH_SECONDS, WORKGROUP,
+};
 use super::limits::{array_lengths, check_scene_fits, largest_binding, PIXEL_SUMS_BYTES};
 use super::pipeline::{bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload};
 use super::shader::Residency;
@@ -268,34 +270,77 @@ impl GpuRenderer {
     /// read back and folded into the f64 film. If the device fails, the film keeps every pass
     /// completed before, and the error says what happened.
     pub fn render(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+        self.render_until(first, count, film, &AtomicBool::new(false))
+    }
+
+    /// [`GpuRenderer::render`] until `stop` is set: the pass under way is dropped whole (its
+    /// sums are not folded into the film), the passes before it stay. Where an iteration or a
+    /// pass is long ([`GpuRenderer::stop_checked`]), the host waits for each dispatch before it
+    /// queues the next and looks at `stop` between them, so that a stop takes effect within a
+    /// dispatch's time (about `TARGET_DISPATCH_SECONDS`) at any image size.
+    pub fn render_until(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> Result<()> {
         crate::film::check_film_for(self.method, film)?;
         let mut done = 0;
         while done < count {
             let n = (count - done).min(MAX_PASS_SPP);
-            if self.method.splats() {
-                self.pass_bidirectional(first + done, n, film)?;
+            let finished = if self.method.splats() {
+                self.pass_bidirectional(first + done, n, film, stop)?
             } else {
-                self.pass(first + done, n, film)?;
+                self.pass(first + done, n, film, stop)?
+            };
+            if !finished {
+                break;
             }
             done += n;
         }
         Ok(())
     }
 
-    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> Result<()> {
+    /// Whether the queued work of a pass of `pixels` x `samples` paths should be waited for,
+    /// dispatch by dispatch, to look at a stop between dispatches: where the pass would take
+    /// longer than [`STOP_LATENCY_SECONDS`] at the throughput measured so far. Shorter passes
+    /// run unwaited (the render loop looks at the stop between them).
+    pub(super) fn stop_checked(&self, pixels: u64, samples: u32) -> bool {
+        let paths_per_second = self.paths_per_dispatch as f64 / TARGET_DISPATCH_SECONDS;
+        (pixels * samples as u64) as f64 / paths_per_second > STOP_LATENCY_SECONDS
+    }
+
+    /// Whether `stop` is set, after waiting for the work queued so far where `checked`
+    /// ([`GpuRenderer::stop_checked`]); false at once where not.
+    pub(super) fn stop_seen(&self, stop: &AtomicBool, checked: bool) -> bool {
+        if !checked {
+            return false;
+        }
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+        stop.load(Ordering::SeqCst)
+    }
+
+    /// One pass of path tracing; false if `stop` cut it short (nothing folded).
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film, stop: &AtomicBool) -> Result<bool> {
         self.check_device()?;
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let start = Instant::now();
-        self.for_each_film_band(film, self.film_rows, |a, z| {
-            self.dispatch_band(first, count, a, z)
+        let checked = self.stop_checked(w as u64 * h as u64, count);
+        let finished = self.for_each_film_band(film, self.film_rows, |a, z| {
+            // Only the first band may stop: later bands would leave rows of the pass folded.
+            self.dispatch_band(first, count, a, z, stop, checked && a == 0)
         })?;
+        if !finished {
+            return Ok(false);
+        }
 
         // Size the next dispatches from this pass's throughput.
         let image = (w as u64) * (h as u64);
         let paths_per_second = (image * count as u64) as f64 / start.elapsed().as_secs_f64();
         self.paths_per_dispatch =
             ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
-        Ok(())
+        Ok(true)
     }
 
     /// Film bands of `rows` rows (the whole image unless its per-pixel buffers are larger than
@@ -305,8 +350,8 @@ impl GpuRenderer {
         &self,
         film: &mut Film,
         rows: u32,
-        mut work: impl FnMut(u32, u32),
-    ) -> Result<()> {
+        mut work: impl FnMut(u32, u32) -> bool,
+    ) -> Result<bool> {
         let h = self.frame.camera.height;
         let mut band_start = 0;
         while band_start < h {
@@ -314,14 +359,17 @@ impl GpuRenderer {
             let mut encoder = self.device.create_command_encoder(&Default::default());
             encoder.clear_buffer(&self.sums, 0, None);
             self.queue.submit([encoder.finish()]);
-            work(band_start, band_end);
+            if !work(band_start, band_end) {
+                // Stopped (the first band alone may stop): nothing of the pass is folded.
+                return Ok(false);
+            }
             let mut encoder = self.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
             self.queue.submit([encoder.finish()]);
             self.fold_sums(film, band_start, band_end - band_start)?;
             band_start = band_end;
         }
-        Ok(())
+        Ok(true)
     }
 
     /// Queues samples `first..first + count` of rows `band_start..band_end` (one film band) in
@@ -333,7 +381,17 @@ impl GpuRenderer {
     /// one workgroup of rows with 64 samples, can exceed the time target on a slow adapter
     /// (about 0.5 s at 256 pixels wide on lavapipe, which has no watchdog); a real GPU's budget
     /// holds many such dispatches.
-    fn dispatch_band(&self, first: u32, count: u32, band_start: u32, band_end: u32) {
+    /// With `checked`, each dispatch is waited for and `stop` looked at before the next; returns
+    /// false if it was set (the band's work is then incomplete).
+    fn dispatch_band(
+        &self,
+        first: u32,
+        count: u32,
+        band_start: u32,
+        band_end: u32,
+        stop: &AtomicBool,
+        checked: bool,
+    ) -> bool {
         let w = self.frame.camera.width;
         let r = (self.paths_per_dispatch / (w as u64 * count.max(1) as u64)).max(1) as u32;
         let rows = (r.div_ceil(WORKGROUP) * WORKGROUP).min(band_end - band_start);
@@ -362,7 +420,11 @@ impl GpuRenderer {
             }
             self.queue.submit([encoder.finish()]);
             y += rows;
+            if y < band_end && self.stop_seen(stop, checked) {
+                return false;
+            }
         }
+        true
     }
 
     /// Rows per film band (tests: a band of a few rows exercises the split on a small image),
