@@ -779,9 +779,10 @@ fn summarise(
     );
     if method.merges() {
         eprintln!(
-            "{} is consistent, not unbiased: merging within r = {:e} shrinking to {:e} \
+            "{} is consistent, not unbiased: merging within {}r = {:e} shrinking to {:e} \
              (alpha {}) leaves a bias that the standard error does not cover",
             method,
+            if radius.reach > 0.0 { "at most " } else { "" },
             radius.initial,
             radius.at((film.spp() as u32).saturating_sub(1)),
             radius.alpha

@@ -52,10 +52,12 @@
 //! camera vertex, `merge.vm`), in the merge itself (vc), and in light tracing where d = 1 (the
 //! light vertex is xd). The light subpath's d_vc and d_vm, which carry η for merges at other
 //! vertices, are left out of every weight. So the radius may be any function of xd, and every
-//! strategy that makes a path weighs its merge with the same r(xd): vcm merges within xd's
-//! clearance (`merging::local_radius`), as a share of the iteration's radius r_i
-//! ([`MergeMis::within`]), and the weights stay a partition of unity. vcm-full, whose paths
-//! may merge at any of their diffuse vertices, keeps one radius.
+//! strategy that makes a path weighs its merge with the same r(xd): vcm merges within a share
+//! of the iteration's largest radius r_i set by xd's distance from the eye along the camera
+//! subpath (`merging::footprint_share`; light tracing, where d = 1, takes |xd − eye|) and
+//! limited by xd's clearance (`merging::local_radius`) ([`MergeMis::within`]), and the weights
+//! stay a partition of unity. SPPM, whose weights are 1, takes the share by distance too.
+//! vcm-full, whose paths may merge at any of their diffuse vertices, keeps one radius.
 //!
 //! Why the power heuristic: it is the path tracer's already (so its NEE and its BSDF sampling of
 //! emitters weigh alike in both methods), and where one strategy is much better than the others,
