@@ -239,7 +239,7 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                 // As on the CPU: at share 1, (1 * r_i)^2 is the grid's own r_i^2 to the bit.
                 let radius = share * frame.merge_radius;
                 let radius2 = radius * radius;
-                let q = query_buckets(hit.p);
+                let q = query_buckets(hit.p, share);
                 for (var j = 0u; j < q.n; j++) {
                     let b = q.b[j];
                     let end = atomicLoad(&grid_starts[b + 1u]);
@@ -311,8 +311,8 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
 }
 
 // One invocation per pixel of the dispatch's tile, for one iteration: the pixel's camera subpath,
-// connected to the light subpath of the same index, which the light pass of this wave has just
-// traced (light subpaths frame.path_origin .. + frame.path_count). Its radiance waits in
+// connected to light subpath (pixel index mod N), where the light pass of this wave has just
+// traced it (light subpaths frame.path_origin .. + frame.path_count). Its radiance waits in
 // `camera_radiance` for the resolve pass, which adds the splats: stored by the pixel's first camera
 // pass of the iteration, added to by the later waves of a merging iteration. The light vertices the
 // wave asked for are recorded in the iteration's image cell: if they overflowed the pool, the
@@ -329,14 +329,17 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     let x = frame.tile_origin.x + gid.x;
     let y = frame.tile_origin.y + gid.y;
     let index = y * frame.camera.width + x;
-    // The pixel's n_c camera subpaths, averaged; the k-th draws the streams of pixel
-    // index + k N (a camera subpath's own blocks there: light subpaths stop at N).
+    // The pixel's n_c camera subpaths, averaged, each connecting to light subpath index mod N;
+    // the k-th draws the streams of pixel index + k w h (a camera subpath's own blocks there:
+    // light subpaths stop at N <= w h).
     let n_c = camera_radiance[band_index(index)].w;
-    let own = index >= frame.path_origin && index - frame.path_origin < frame.path_count;
+    let path = index % frame.n_light_paths;
+    let own = path >= frame.path_origin && path - frame.path_origin < frame.path_count;
+    let pixels = frame.camera.width * frame.camera.height;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
-        let sampler = Sampler(frame.seed, index + k * frame.n_light_paths, frame.first_sample);
-        radiance += trace_camera_path(x, y, n_c, sampler, index, own);
+        let sampler = Sampler(frame.seed, index + k * pixels, frame.first_sample);
+        radiance += trace_camera_path(x, y, n_c, sampler, path, own);
     }
     // BDPT's waves each cover their own pixels; a merging iteration's first wave covers all.
     var before = vec3<f32>(0.0);

@@ -28,6 +28,8 @@ struct GridParams {
 
 // Cell coordinates are clamped to +-2^30 before hashing (`CELL_LIMIT`).
 const CELL_LIMIT: f32 = 1073741824.0;
+// The slack, in cell units, by which a query takes a neighbouring cell its ball nearly reaches.
+const QUERY_MARGIN: f32 = 0.0009765625;
 
 // The hash of a cell: three large primes, wrapping u32 arithmetic (`hash_cell`).
 fn hash_cell(c: vec3<i32>) -> u32 {
@@ -45,19 +47,22 @@ fn grid_bucket(p: vec3<f32>) -> u32 {
     return hash_cell(vec3<i32>(floor(cell_units(p)))) & grid_params.mask;
 }
 
-// The buckets of the 2x2x2 cells that hold every point within r of p, each once: the first n.
+// The buckets of the cells that hold every point within share * r of p (share <= 1), each once:
+// the first n (hash_grid.rs: GridParams::query_buckets).
 struct QueryBuckets {
     b: array<u32, 8>,
     n: u32,
 }
 
-fn query_buckets(p: vec3<f32>) -> QueryBuckets {
+fn query_buckets(p: vec3<f32>, share: f32) -> QueryBuckets {
     let u = cell_units(p);
     let cf = floor(u);
     let f = u - cf;
     let c = vec3<i32>(cf);
-    // Per axis, the neighbour on the side of the nearer face.
-    let step = select(vec3<i32>(1), vec3<i32>(-1), f < vec3<f32>(0.5));
+    // Per axis, the neighbour on the side of the nearer face, if the ball reaches it.
+    let reach = 0.5 * share + QUERY_MARGIN;
+    let near = select(vec3<i32>(1), vec3<i32>(-1), f < vec3<f32>(0.5));
+    let step = select(near, vec3<i32>(0), min(f, 1.0 - f) >= vec3<f32>(reach));
     var out: QueryBuckets;
     out.n = 0u;
     for (var k = 0u; k < 8u; k++) {
@@ -246,7 +251,7 @@ fn grid_query_check(@builtin(global_invocation_id) gid: vec3<u32>) {
     var count = 0u;
     var sum = 0u;
     var mix = 0u;
-    let q = query_buckets(p);
+    let q = query_buckets(p, 1.0);
     for (var j = 0u; j < q.n; j++) {
         let b = q.b[j];
         let end = atomicLoad(&grid_starts[b + 1u]);

@@ -25,12 +25,18 @@ impl Backend for Fragile {
     fn device(&self) -> String {
         self.inner.device()
     }
-    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+    fn pass_until(
+        &mut self,
+        first: u32,
+        count: u32,
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
         if self.passes == 1 {
             self.device.destroy();
         }
         self.passes += 1;
-        self.inner.pass(first, count, film)
+        self.inner.pass_until(first, count, film, stop)
     }
 }
 

@@ -215,6 +215,7 @@ macro_rules! rust_constants {
 
 /// The constants that the WGSL declares again, with their Rust values (each exact in f64).
 fn shared_constants() -> Vec<(&'static str, f64)> {
+    use hexray::accel::hash_grid::QUERY_MARGIN;
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
     use hexray::gpu::bidirectional::SCAN_BLOCK;
     use hexray::layout::{
@@ -251,6 +252,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         COPLANAR_COS,
         COPLANAR_OFFSET,
         FOOTPRINT_FLOOR,
+        QUERY_MARGIN,
     )
 }
 

@@ -26,6 +26,7 @@ mod gpu_parity;
 mod gpu_random;
 mod independent_renderer;
 mod layout;
+mod light_paths;
 mod light_samples;
 mod light_tracing;
 mod merge;

@@ -24,6 +24,11 @@ use rayon::prelude::*;
 /// cannot overflow an i32 (the same clamp on both backends).
 const CELL_LIMIT: f32 = 1_073_741_824.0;
 
+/// The slack, in cell units, by which a query takes a neighbouring cell that its ball only
+/// nearly reaches (`GridParams::query_buckets`): 2^-10, so that a vertex on the ball's rim that
+/// rounding puts across the face is still found.
+pub const QUERY_MARGIN: f32 = 1.0 / 1024.0;
+
 /// The hash of a cell, SmallVCM's and Teschner et al.'s (2003) three large primes, in wrapping
 /// u32 arithmetic (as WGSL computes it).
 #[inline]
@@ -87,20 +92,30 @@ impl GridParams {
         hash_cell(self.cell(p)) & self.mask
     }
 
-    /// The buckets of the 2x2x2 cells that hold every point within r of `p`, each once: the
-    /// first `n` entries of the array.
+    /// The buckets of the cells that hold every point within `share` · r of `p` (share ≤ 1),
+    /// each once: the first `n` entries of the array. A cell is 2r wide, so per axis the ball
+    /// reaches at most the neighbour on the side of the nearer face, and that only where the
+    /// face lies within share / 2 cell (with [`QUERY_MARGIN`]): 2x2x2 cells at share 1, and on
+    /// average (1 + share)³ of them below, which is what a vertex merging within less than the
+    /// grid's radius saves. Within the ball the same vertices are found in the same order.
     #[inline]
-    pub fn query_buckets(&self, p: Vec3) -> ([u32; 8], usize) {
+    pub fn query_buckets(&self, p: Vec3, share: f32) -> ([u32; 8], usize) {
         let u = self.cell_units(p);
         let c = u.floor();
         let f = u - c;
         let c = c.as_ivec3();
-        // Per axis, the neighbour on the side of the nearer face.
-        let step = IVec3::new(
-            if f.x < 0.5 { -1 } else { 1 },
-            if f.y < 0.5 { -1 } else { 1 },
-            if f.z < 0.5 { -1 } else { 1 },
-        );
+        // Per axis, the neighbour on the side of the nearer face, if the ball reaches it.
+        let reach = 0.5 * share + QUERY_MARGIN;
+        let side = |f: f32| {
+            if f.min(1.0 - f) >= reach {
+                0
+            } else if f < 0.5 {
+                -1
+            } else {
+                1
+            }
+        };
+        let step = IVec3::new(side(f.x), side(f.y), side(f.z));
         let mut out = [0u32; 8];
         let mut n = 0;
         for k in 0..8 {
@@ -182,7 +197,7 @@ impl HashGrid {
     /// (|x − p|² < r²), bucket by bucket in the order of [`GridParams::query_buckets`].
     #[inline]
     pub fn query(&self, p: Vec3, visit: impl FnMut(u32)) {
-        self.finish_query(&self.begin_query(p), visit);
+        self.finish_query(&self.begin_query(p, 1.0), visit);
     }
 
     /// The first of a query's three steps ([`HashGrid::query`] runs them back to back): its
@@ -195,11 +210,11 @@ impl HashGrid {
     /// (next-event estimation, connections), and each step finds its data in the cache. A
     /// prefetch is a hint: what the query visits does not change.
     #[inline]
-    pub fn begin_query(&self, p: Vec3) -> PendingQuery {
+    pub fn begin_query(&self, p: Vec3, share: f32) -> PendingQuery {
         let (buckets, n) = if self.params.count == 0 {
             ([0; 8], 0)
         } else {
-            self.params.query_buckets(p)
+            self.params.query_buckets(p, share)
         };
         for &b in &buckets[..n] {
             prefetch(&self.starts[b as usize]);

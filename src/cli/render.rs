@@ -63,6 +63,11 @@ pub(crate) struct RenderArgs {
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
+    /// Light subpaths per iteration N of sppm, vcm and vcm-full, at most one per pixel (more are
+    /// cut to that). Default: one per pixel up to 262144 (512x512); beyond, the camera subpaths
+    /// share them (pixel index mod N), so an iteration's cost grows as its pixels.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) light_paths: Option<u32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
     /// (path tracing only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::math::sampling::MAX_LIGHT_SAMPLES as i64))]
@@ -149,12 +154,14 @@ pub(crate) fn merge_radius_of(
     radius: Option<f32>,
     alpha: Option<f32>,
     reach: Option<f32>,
+    light_paths: Option<u32>,
     flat: &FlatScene,
     camera: &Camera,
 ) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
-    if !method.merges() && (radius.is_some() || alpha.is_some()) {
+    if !method.merges() && (radius.is_some() || alpha.is_some() || light_paths.is_some()) {
         return Err(format!(
-            "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
+            "--radius, --alpha and --light-paths are for --method sppm, vcm and vcm-full, not \
+             {method}"
         ));
     }
     let mut r = hexray::transport::merging::MergeRadius::default_for(flat, camera, method);
@@ -166,6 +173,7 @@ pub(crate) fn merge_radius_of(
     if let Some(a) = alpha {
         r.alpha = a;
     }
+    r.light_paths = light_paths;
     if method == Method::Sppm && r.initial <= 0.0 {
         return Err("--method sppm needs a merge radius above 0".into());
     }
@@ -271,8 +279,16 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
 
     let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
-    let radius = merge_radius_of(method, args.radius, args.alpha, args.reach, &flat, &camera)
-        .map_err(refuse)?;
+    let radius = merge_radius_of(
+        method,
+        args.radius,
+        args.alpha,
+        args.reach,
+        args.light_paths,
+        &flat,
+        &camera,
+    )
+    .map_err(refuse)?;
     // The last check before any work: the outputs can be written (not found after the render).
     output::check_writable(&out, args.variance)
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;

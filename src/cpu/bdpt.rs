@@ -310,7 +310,7 @@ impl CameraPass<'_> {
                         1.0
                     };
                     (q >= 1.0 || sampler.draw4(dim_merge(bounce))[0] < q)
-                        .then(|| (photons, photons.grid.begin_query(hit.p), q))
+                        .then(|| (photons, photons.grid.begin_query(hit.p, share), q))
                 });
 
                 // Step 4 - next-event estimation (s = 1): an emitter point chosen by power,

@@ -188,10 +188,11 @@ impl LightPassBuffers {
 }
 
 /// Adds iterations `first..first + count` of light tracing, BDPT, SPPM or VCM to `film`. Each
-/// iteration traces one light subpath per pixel (light pass, splatting into `buffers.splats`),
-/// builds the hash grid of their vertices (merging, with iteration i's radius), then n_c
-/// camera subpaths per pixel (`subpath::camera_subpaths`; not for light tracing) that connect
-/// to the light subpath of the same index and merge with every pixel's; each pixel's value for
+/// iteration traces N light subpaths (light pass, splatting into `buffers.splats`; N is one per
+/// pixel, for the merging methods at most `merging::MAX_LIGHT_PATHS`), builds the hash grid of
+/// their vertices (merging, with iteration i's radius), then n_c camera subpaths per pixel
+/// (`subpath::camera_subpaths`; not for light tracing) that connect to light subpath
+/// (pixel index mod N) and merge with every light subpath's vertices; each pixel's value for
 /// the iteration, the mean of its camera subpaths' radiance plus the splats it received, is one
 /// sample of that pixel, and the iteration's image mean one sample of the image mean (batch
 /// means, `film.rs`). Splat sums do not depend on thread order, so images are bit-identical for
@@ -231,7 +232,14 @@ pub fn render_iterations_until(
     stop: &AtomicBool,
 ) -> u64 {
     assert!(method.splats(), "{method} does not trace light subpaths");
-    let n_paths = film.width * film.height;
+    let pixels = film.width * film.height;
+    let n_paths = buffers.radius.light_paths_for(method, pixels as u64);
+    // N as the estimators count it (but for a planted fault, N).
+    let n_counted = if faults.light_paths_counted_per_pixel {
+        pixels
+    } else {
+        n_paths
+    };
     let mode = match method {
         Method::Light => LightPassMode::LightTracing,
         Method::Sppm => LightPassMode::PhotonMapping,
@@ -256,9 +264,10 @@ pub fn render_iterations_until(
             method,
             faults,
             n_paths,
+            n_counted,
             radius,
             reach: buffers.radius.reach,
-            merge: MergeMis::new(radius, n_paths, method),
+            merge: MergeMis::new(radius, n_counted, method),
             stop,
         };
         rays += iteration.light_pass(mode, buffers);
@@ -286,8 +295,12 @@ struct Iteration<'a> {
     s: u32,
     method: Method,
     faults: Faults,
-    /// N, the light subpaths of an iteration: one per pixel.
+    /// N, the light subpaths of an iteration: one per pixel, for the merging methods at most
+    /// `merging::MAX_LIGHT_PATHS` (`merging::light_paths`).
     n_paths: u32,
+    /// N as the kernel, the splats and the MIS weights count it: `n_paths` (but for the planted
+    /// fault `Faults::light_paths_counted_per_pixel`).
+    n_counted: u32,
     /// The largest merge radius of this iteration (0: no merging).
     radius: f32,
     /// The view's reach (`MergeRadius::reach`).
@@ -312,7 +325,7 @@ impl Iteration<'_> {
         let pass = LightPass {
             scene,
             camera: self.camera,
-            n_light_paths: n_paths,
+            n_light_paths: self.n_counted,
             mode,
             faults: self.faults,
             camera_subpaths: &buffers.camera_subpaths,
@@ -387,7 +400,7 @@ impl Iteration<'_> {
         let camera_pass = bdpt::CameraPass {
             scene,
             camera: self.camera,
-            n_light_paths: n_paths,
+            n_light_paths: self.n_counted,
             faults,
             shadow_threshold: buffers.shadow_threshold,
             connects: method.connects(),
@@ -400,7 +413,11 @@ impl Iteration<'_> {
                 bdpt::Photons {
                     records: &buffers.records,
                     grid: &buffers.grid,
-                    normalization: kernel_normalization(radius, n_paths, faults.merge_kernel_ball),
+                    normalization: kernel_normalization(
+                        radius,
+                        self.n_counted,
+                        faults.merge_kernel_ball,
+                    ),
                 }
             }),
         };
@@ -421,14 +438,16 @@ impl Iteration<'_> {
                     for x in tx * TILE..((tx + 1) * TILE).min(w) {
                         let index = (y * w + x) as usize;
                         let n_c = if method != Method::Light {
-                            // The pixel's n_c camera subpaths, averaged; the k-th draws the
-                            // streams of pixel index + k · N (a camera subpath's own blocks
-                            // there: light subpaths stop at N).
-                            let (a, b) = (buffers.starts[index], buffers.starts[index + 1]);
+                            // The pixel's n_c camera subpaths, averaged, each connecting to
+                            // light subpath index mod N; the k-th draws the streams of pixel
+                            // index + k · w · h (a camera subpath's own blocks there: light
+                            // subpaths stop at N ≤ w · h).
+                            let path = index % n_paths as usize;
+                            let (a, b) = (buffers.starts[path], buffers.starts[path + 1]);
                             let light_path = &buffers.vertices[a as usize..b as usize];
                             let n_c = buffers.camera_subpaths[index];
                             for k in 0..n_c {
-                                let sampler = Sampler::new(seed, index as u32 + k * n_paths, s);
+                                let sampler = Sampler::new(seed, index as u32 + k * w * h, s);
                                 camera_pass.trace_camera_path(
                                     x, y, n_c, &sampler, light_path, terms, &mut rays,
                                 );

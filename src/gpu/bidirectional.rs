@@ -2,13 +2,14 @@
 //! `shaders/bdpt.wgsl` and the resolve pass of `shaders/film.wgsl`.
 //!
 //! Each iteration is a sequence of dispatches over the same buffers, as on the CPU
-//! (`cpu::render_iterations`): the light pass traces one light subpath per pixel, splatting its
-//! connections to the camera into order-independent fixed-point tallies and (BDPT) storing its
-//! diffuse vertices in a pool; the camera pass traces one camera subpath per pixel and connects
-//! it to the light subpath of the same index; the resolve pass adds each pixel's camera radiance
-//! and splats as one sample, and the image's sum for the iteration's batch mean.
+//! (`cpu::render_iterations`): the light pass traces N light subpaths (one per pixel; the merging
+//! methods at most `merging::MAX_LIGHT_PATHS`), splatting their connections to the camera into
+//! order-independent fixed-point tallies and (BDPT) storing their diffuse vertices in a pool;
+//! the camera pass traces one camera subpath per pixel and connects it to light subpath (pixel
+//! index mod N); the resolve pass adds each pixel's camera radiance and splats as one sample,
+//! and the image's sum for the iteration's batch mean.
 //!
-//! The pool holds the vertices of one *wave* of light subpaths (a band of rows of the image):
+//! The pool holds the vertices of one *wave* of light subpaths (whole rows' worth):
 //! BDPT runs the light and camera passes wave by wave, so any image fits a pool of bounded size.
 //! Waves are sized from the vertices per subpath measured so far. A wave that asks for more
 //! vertices than the pool holds is not lost: the resolve pass drops that iteration whole, and
@@ -24,7 +25,8 @@
 //! the waves, that is every strategy once, as in one wave (the merges are summed in another
 //! order, so a multi-wave iteration equals the CPU's to f32 rounding, not bit for bit). An
 //! iteration that overflows the pool is traced again after the pool has grown, up to what the
-//! device binds; beyond that, in more waves: each costs a camera pass, but any iteration fits.
+//! device binds; beyond that, in more waves: each costs a camera pass, but any iteration fits,
+//! and N's bound keeps the waves of an iteration few at any image size.
 
 use super::frame::{tally_words, CELL_WORDS, MAX_PASS_SPP};
 use super::limits::{check_image_fits, largest_binding, splat_band_rows};

@@ -67,12 +67,13 @@ impl Backend for CpuBackend<'_> {
             _ => Vec::new(),
         };
         if let (Some(b), true) = (&self.buffers, self.method.merges()) {
-            out.extend(merging_provenance(&b.radius));
+            out.extend(merging_provenance(
+                &b.radius,
+                self.method,
+                b.camera_subpaths.len() as u64,
+            ));
         }
         out
-    }
-    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
-        self.pass_until(first, count, film, &AtomicBool::new(false))
     }
     fn pass_until(
         &mut self,

@@ -18,9 +18,6 @@ impl Backend for GpuBackend {
     fn device(&self) -> String {
         self.adapter.clone()
     }
-    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
-        self.renderer.render(first, count, film)
-    }
     fn pass_until(
         &mut self,
         first: u32,

@@ -18,19 +18,19 @@ pub trait Backend {
     fn name(&self) -> &'static str;
     /// The device it runs on, for logs and metadata.
     fn device(&self) -> String;
-    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()>;
-    /// [`Backend::pass`] until `stop` is set: a backend that can stop under way adds only the
-    /// samples it finished whole (each pixel as many) and returns early; the caller reads how
-    /// many from the film. By default the whole pass.
+    /// Adds samples `first..first + count` until `stop` is set: a backend stopped under way
+    /// adds only the samples it finished whole (each pixel as many) and returns early; the
+    /// caller reads how many from the film.
     fn pass_until(
         &mut self,
         first: u32,
         count: u32,
         film: &mut Film,
         stop: &AtomicBool,
-    ) -> anyhow::Result<()> {
-        let _ = stop;
-        self.pass(first, count, film)
+    ) -> anyhow::Result<()>;
+    /// The whole pass: [`Backend::pass_until`] with no stop.
+    fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
+        self.pass_until(first, count, film, &AtomicBool::new(false))
     }
     /// What the method chose or met that an image's provenance should say (`key`, value), for
     /// the EXR metadata and the log.

@@ -36,6 +36,10 @@ pub struct Faults {
     /// nearer than that (`merging::local_radius`): still consistent, but the room's edges come
     /// out darker at a given radius (false when correct).
     pub merge_ignores_clearance: bool,
+    /// The merging methods (the CPU): with fewer light subpaths N than pixels, the kernel's
+    /// normalisation, the splats and the MIS weights count one per pixel instead of N (false
+    /// when correct).
+    pub light_paths_counted_per_pixel: bool,
 }
 
 impl Faults {
@@ -49,6 +53,7 @@ impl Faults {
         merge_rr_undivided: false,
         mirror_light_twice: false,
         merge_ignores_clearance: false,
+        light_paths_counted_per_pixel: false,
     };
 }
 

@@ -97,13 +97,39 @@ pub const VIEW_REACH_QUANTILE: f64 = 0.5;
 /// Mirror and glass bounces [`view_reach`] follows to a diffuse vertex.
 const VIEW_PROBE_BOUNCES: u32 = 16;
 
+/// The most light subpaths N an iteration of the merging methods traces by default: 2^18, one
+/// per pixel up to a 512x512 image. The radius is a share of the view, not of a pixel, so the
+/// photons a disk gathers, and merging's noise, depend on N and not on the image's size; what
+/// grows with the image is the camera pass. A merge reads every light vertex of the iteration,
+/// so on the GPU each further wave of the vertex pool costs a camera pass over the whole image:
+/// with N bounded, the waves per iteration are bounded too, and an iteration's cost grows as its
+/// pixels. 2^18 subpaths of a closed room store about 1 million vertices, one wave within
+/// lavapipe's 128 MiB binding (80 bytes each).
+pub const MAX_LIGHT_PATHS: u32 = 1 << 18;
+
+/// N, the light subpaths per iteration of `method` on an image of `pixels`: `requested` if given
+/// (`--light-paths`, merging methods only), else one per pixel, for the merging methods at most
+/// [`MAX_LIGHT_PATHS`]. Light tracing and BDPT trace one per pixel: each camera subpath of BDPT
+/// connects to the light subpath of its own pixel, wave by wave.
+pub fn light_paths(method: Method, pixels: u64, requested: Option<u32>) -> u32 {
+    let per_pixel = pixels.min(u32::MAX as u64) as u32;
+    if !method.merges() {
+        return per_pixel;
+    }
+    requested
+        .unwrap_or_else(|| per_pixel.min(MAX_LIGHT_PATHS))
+        .clamp(1, per_pixel.max(1))
+}
+
 /// The merge radius of a render: its largest radius r_1 in scene units, α, and the view's reach
-/// T at which a vertex takes the largest radius (0: every vertex takes it).
+/// T at which a vertex takes the largest radius (0: every vertex takes it); with N, the light
+/// subpaths an iteration merges with (`light_paths`: None, the default of [`light_paths`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MergeRadius {
     pub initial: f32,
     pub alpha: f32,
     pub reach: f32,
+    pub light_paths: Option<u32>,
 }
 
 impl MergeRadius {
@@ -113,6 +139,7 @@ impl MergeRadius {
             initial,
             alpha,
             reach: 0.0,
+            light_paths: None,
         }
     }
 
@@ -144,6 +171,17 @@ impl MergeRadius {
             } else {
                 reach
             },
+            light_paths: None,
+        }
+    }
+
+    /// N of `method` on an image of `pixels` ([`light_paths`]); one per pixel at radius 0 (vcm
+    /// is then BDPT).
+    pub fn light_paths_for(&self, method: Method, pixels: u64) -> u32 {
+        if self.initial > 0.0 {
+            light_paths(method, pixels, self.light_paths)
+        } else {
+            light_paths(Method::Bdpt, pixels, None)
         }
     }
 

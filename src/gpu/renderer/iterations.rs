@@ -50,7 +50,11 @@ impl GpuRenderer {
                     Vec::new()
                 };
                 if let Some(m) = &b.merging {
-                    v.extend(crate::film::provenance::merging_provenance(&m.radius));
+                    v.extend(crate::film::provenance::merging_provenance(
+                        &m.radius,
+                        self.method,
+                        self.frame.camera.width as u64 * self.frame.camera.height as u64,
+                    ));
                 }
                 v.push((
                     "light_vertex_pool",
@@ -378,16 +382,24 @@ impl GpuRenderer {
         let pixels = w as u64 * h as u64;
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
         let band_pixels = b.band_pixels;
-        // Rows per wave: as many as the pool holds at the measured vertices per subpath, and at
-        // most a band's (the pool's path heads are a band's). A merging iteration needs every
-        // light vertex of the iteration, so each of its waves is followed by a camera pass over
-        // the whole band (merges with that wave's photons; the other strategies in the pixel's
-        // own wave); one wave when the pool holds them all. Light tracing stores nothing.
+        // N, the light subpaths of an iteration (`merging::light_paths`), as on the CPU.
+        let n_paths = b.merging.as_ref().map_or(pixels as u32, |m| {
+            m.radius.light_paths_for(self.method, pixels)
+        });
+        // Light subpaths per wave: as many as the pool holds at the measured vertices per
+        // subpath, and at most a band's pixels (the pool's path heads are a band's); whole rows
+        // of the image for BDPT, whose camera pass covers the wave's own pixels. A merging
+        // iteration needs every light vertex of the iteration, so each of its waves is followed
+        // by a camera pass over the whole band (merges with that wave's photons; the other
+        // strategies where the pixel's light subpath, index mod N, is the wave's); one wave when
+        // the pool holds them all, which N bounds. Light tracing stores nothing.
         let merging = b.merging.as_ref().is_some_and(|m| m.radius.initial > 0.0);
-        let wave_rows = if b.camera_pipeline.is_none() {
-            b.band_rows
+        let wave_paths = if b.camera_pipeline.is_none() {
+            b.band_rows * w
         } else {
-            ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32).clamp(1, b.band_rows)
+            let rows = ((b.capacity as f64 / (b.vertices_per_path * w as f64)) as u32)
+                .clamp(1, b.band_rows);
+            rows * w
         };
 
         // An iteration costs about three path-traced samples (light, camera and connections).
@@ -417,10 +429,11 @@ impl GpuRenderer {
                 // Merging's radius this iteration, its constants in the MIS weights and the
                 // kernel's normalisation, as on the CPU (`cpu::render_iterations`).
                 let radius = b.merging.as_ref().map_or(0.0, |m| m.radius.at(s));
-                let merge = MergeMis::new(radius, pixels as u32, self.method);
+                let merge = MergeMis::new(radius, n_paths, self.method);
                 let ball = b.merging.as_ref().is_some_and(|m| m.ball_kernel);
-                let normalization = kernel_normalization(radius, pixels as u32, ball);
+                let normalization = kernel_normalization(radius, n_paths, ball);
                 let frame = Frame {
+                    n_light_paths: n_paths,
                     first_sample: s,
                     sample_count: 1,
                     slot: slot as u32,
@@ -438,22 +451,23 @@ impl GpuRenderer {
                     band_pixels: band_pixels as u32,
                     ..self.frame
                 };
-                // Wave by wave: the light subpaths of a band of rows (with the pool's counter
-                // cleared before each), then the camera subpaths: BDPT's of the wave's pixels in
-                // the film band, a merging method's of the whole film band.
-                let mut y = 0;
-                while y < h {
-                    let y1 = (y + wave_rows).min(h);
+                // Wave by wave: light subpaths p0..p1 (with the pool's counter cleared before
+                // each), then the camera subpaths: BDPT's of the wave's pixels (rows p0 / w ..
+                // p1 / w, N being the pixels) in the film band, a merging method's of the whole
+                // film band.
+                let mut p0 = 0;
+                while p0 < n_paths {
+                    let p1 = (p0 + wave_paths).min(n_paths);
                     let wave = Frame {
-                        path_origin: y * w,
-                        path_count: (y1 - y) * w,
-                        wave_origin: y * w,
+                        path_origin: p0,
+                        path_count: p1 - p0,
+                        wave_origin: p0,
                         ..frame
                     };
                     let mut encoder = self.device.create_command_encoder(&Default::default());
                     encoder.clear_buffer(&b.tallies, 4 * vertex_counter_word(band_pixels), Some(4));
                     self.queue.submit([encoder.finish()]);
-                    if !self.light_dispatches(&wave, y * w, (y1 - y) * w, stop, checked) {
+                    if !self.light_dispatches(&wave, p0, p1 - p0, stop, checked) {
                         return false;
                     }
                     self.mark("light");
@@ -462,14 +476,14 @@ impl GpuRenderer {
                             self.build_grid(&wave, radius);
                             (band_start, band_end)
                         } else {
-                            (y.max(band_start), y1.min(band_end))
+                            ((p0 / w).max(band_start), p1.div_ceil(w).min(band_end))
                         };
                         if a < z && !self.row_dispatches(camera, &wave, a, z, stop, checked) {
                             return false;
                         }
                         self.mark("camera");
                     }
-                    y = y1;
+                    p0 = p1;
                 }
                 let never = AtomicBool::new(false);
                 self.row_dispatches(
@@ -539,7 +553,7 @@ impl GpuRenderer {
             b.retraced += overflowed.len() as u64;
         }
         if b.camera_pipeline.is_some() {
-            let asked_per_path = most_asked as f64 / (wave_rows as f64 * w as f64);
+            let asked_per_path = most_asked as f64 / wave_paths.min(n_paths) as f64;
             b.vertices_per_path = (1.25 * asked_per_path).max(0.5);
         }
         if merging && !overflowed.is_empty() && b.capacity < b.max_capacity {
@@ -548,7 +562,7 @@ impl GpuRenderer {
             let capacity = ((most_asked as u64 * 5 / 4).max(2 * b.capacity as u64))
                 .min(b.max_capacity as u64) as u32;
             b.resize_pool(&self.device, capacity);
-        } else if !overflowed.is_empty() && wave_rows == 1 {
+        } else if !overflowed.is_empty() && wave_paths == w {
             bail!(
                 "{}: one row of {w} light subpaths stored {most_asked} vertices, more than the \
                  GPU's vertex pool holds ({}); render a narrower image, or use --backend cpu",
