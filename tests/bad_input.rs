@@ -387,6 +387,8 @@ fn bad_arguments_exit_2_before_rendering() {
         vec!["--exposure", "NaN"],
         vec!["--exposure", "inf"],
         vec!["--checkpoint", "0"],
+        vec!["--light-paths", "0"],
+        vec!["--method", "path", "--light-paths", "1000"],
     ] {
         let mut all = vec![
             "render",
