@@ -47,10 +47,10 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
     /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units, the same at every
-    /// camera vertex. Default: a disk that spans a fixed share of the view at the vertex's
-    /// distance from the camera (vcm 0.018 of the view's height there, sppm and vcm-full a third
-    /// of that; 0.3 x on a hardware GPU, whose renders run many more iterations), up to the
-    /// distance that half of the view lies within; vcm-full takes that largest disk everywhere.
+    /// camera vertex. Default: a disk that spans a fixed share of the view's height at the
+    /// distance that half of the view lies within (vcm 0.0155 of it, sppm and vcm-full 0.006;
+    /// 0.3 x on a hardware GPU, whose renders run many more iterations); sppm's nearer vertices
+    /// merge within that share of the view's height at their own distance.
     /// Iteration i merges within r_1 i^((alpha-1)/2); vcm merges within less where another
     /// surface is nearer to the camera vertex (its clearance, at least 0.1 of that). vcm and
     /// vcm-full with 0 are bdpt.

@@ -37,28 +37,31 @@ use glam::Vec3;
 // The hash grid needs a largest radius per iteration: the radius at the view's reach T
 // ([`view_reach`]), the distance that half of the view's first diffuse vertices lie within.
 // Farther vertices merge within that largest radius, r_i(x) = r_i(T). So a render's
-// radius is r_i (the largest, [`MergeRadius::at`]) and T ([`MergeRadius::reach`]); each
-// vertex's is r_i · min(t(x) / T, 1) ([`footprint_share`]), limited further by the vertex's
-// clearance in vcm ([`merge_share`]).
+// radius is r_i (the largest, [`MergeRadius::at`]) and T ([`MergeRadius::reach`]); in sppm each
+// vertex's is r_i · min(t(x) / T, 1) ([`footprint_share`]). vcm and vcm-full merge within r_i(T)
+// at every vertex (reach 0), vcm further limited by the vertex's clearance ([`merge_share`]):
+// at equal time that was below the scene-bound radius's error on all three reference scenes,
+// and the share by distance was not (see [`VCM_VIEW_SHARE`]).
 
-/// k for `vcm` (which merges within each vertex's clearance, [`local_radius`]): 0.036, a disk
-/// at the view's reach 0.018 of the view's height there (the height is 2 tan(θ/2) T). On the
-/// reference scenes at 256x256 in 20 s on the CPU, vcm's relMSE (the references' noise
-/// subtracted) summed over seeds 14 – 16 is 1.03, 0.98 and 0.85 of that at the default before
-/// the radius followed the view (0.03 of the scene's bounding-sphere radius at every vertex) on
-/// tncg15_room, glass_room and cornell_box; 0.031 gave 1.07, 0.90 and 0.85, and (seeds 12 and
-/// 13) the same 0.031 with one radius at every vertex (no share by distance) 0.98, 1.04 and
-/// 0.98 (docs/journal/2026-11-28_view_radius.md). Where surfaces meet, a disk that reaches across the
-/// edge counts the photons of the wrong surface and misses the light behind it; within the
-/// clearance that bias is gone, and the flat walls bear a wide disk
-/// (docs/journal/2026-11-27_clearance.md).
-pub const VCM_VIEW_SHARE: f32 = 0.036;
+/// k for `vcm` (which merges within each vertex's clearance, [`local_radius`]), one radius at
+/// every vertex: 0.031, a disk 0.0155 of the view's height at the view's reach (the height is
+/// 2 tan(θ/2) T). On the reference scenes at 256x256 in 30 s on the CPU, seeds 21 – 24 in one
+/// run, vcm's relMSE (the references' noise subtracted) was 0.984, 0.982 and 0.922 of that at
+/// the default before the radius followed the view (0.03 of the scene's bounding-sphere radius)
+/// on tncg15_room, glass_room and cornell_box; a share by distance, r_i · min(t / T, 1) at
+/// k = 0.036, gave 1.062, 0.982 and 0.802 (docs/journal/2026-11-28_view_radius.md): the room
+/// wants a wide disk near the camera. Where surfaces meet, a disk that reaches across the edge
+/// counts the photons of the wrong surface and misses the light behind it; within the clearance
+/// that bias is gone, and the flat walls bear a wide disk (docs/journal/2026-11-27_clearance.md).
+pub const VCM_VIEW_SHARE: f32 = 0.031;
 
-/// k for `sppm` and `vcm-full`: a third of [`VCM_VIEW_SHARE`], as 0.01 of the scene radius was
-/// a third of vcm's 0.03 when the radius was a share of the scene's bounds. Their disks do not
-/// stop at the clearance, and SPPM's relMSE at 0.01 of the scene radius was 0.13 – 0.16 of
-/// 0.003's (CPU, 256x256, 30 s; docs/journal/2026-11-27_merge_radius.md).
-pub const DEFAULT_VIEW_SHARE: f32 = VCM_VIEW_SHARE / 3.0;
+/// k for `sppm` and `vcm-full`: 0.012, a third of the 0.036 that vcm's share by distance took,
+/// as 0.01 of the scene radius was a third of vcm's 0.03 when the radius was a share of the
+/// scene's bounds. Their disks do not stop at the clearance, and SPPM's relMSE at 0.01 of the
+/// scene radius was 0.13 – 0.16 of 0.003's (CPU, 256x256, 30 s;
+/// docs/journal/2026-11-27_merge_radius.md). SPPM's relMSE at 30 s, seeds 21 and 22, was 1.075,
+/// 1.001 and 1.093 of the scene-bound radius's on the three reference scenes: not tuned yet.
+pub const DEFAULT_VIEW_SHARE: f32 = 0.012;
 
 /// The share of a radius that a hardware GPU takes by default: 0.3. Such a GPU runs tens to
 /// hundreds of times the iterations of the CPU backend in the same time, and in long renders
@@ -150,12 +153,13 @@ impl MergeRadius {
         (self.initial as f64 * i.powf((self.alpha as f64 - 1.0) * 0.5)) as f32
     }
 
-    /// The default of `method` for what `camera` sees of `scene`: the disk k · tan(θ/2) · t(x)
-    /// wide ([`VCM_VIEW_SHARE`] for vcm, [`DEFAULT_VIEW_SHARE`] for sppm and vcm-full) up to the
-    /// view's reach T ([`view_reach`]), α = [`DEFAULT_ALPHA`]. vcm-full merges within the radius
-    /// at T at every vertex: its paths may merge at any of their diffuse vertices, and their MIS
-    /// weights carry one η for all of them (`crate::transport::subpath`, "A radius of the
-    /// vertex"); vcm's and SPPM's merge at their camera subpath's first diffuse vertex alone.
+    /// The default of `method` for what `camera` sees of `scene`: the disk k · tan(θ/2) · T wide
+    /// at the view's reach T ([`view_reach`]; k [`VCM_VIEW_SHARE`] for vcm, [`DEFAULT_VIEW_SHARE`]
+    /// for sppm and vcm-full), α = [`DEFAULT_ALPHA`]. SPPM's nearer vertices merge within
+    /// k · tan(θ/2) · t(x). vcm and vcm-full merge within the radius at T at every vertex: vcm's
+    /// error was lower so (see [`VCM_VIEW_SHARE`]), and vcm-full's paths may merge at any of their
+    /// diffuse vertices, whose MIS weights carry one η for all of them
+    /// (`crate::transport::subpath`, "A radius of the vertex").
     pub fn default_for(scene: &FlatScene, camera: &Camera, method: Method) -> MergeRadius {
         let k = if method.merges_within_clearance() {
             VCM_VIEW_SHARE
@@ -166,11 +170,7 @@ impl MergeRadius {
         MergeRadius {
             initial: k * Vec3::from(camera.up).length() * reach,
             alpha: DEFAULT_ALPHA,
-            reach: if method == Method::VcmFull {
-                0.0
-            } else {
-                reach
-            },
+            reach: if method == Method::Sppm { reach } else { 0.0 },
             light_paths: None,
         }
     }
