@@ -234,7 +234,7 @@ pub fn render_iterations_until(
     assert!(method.splats(), "{method} does not trace light subpaths");
     let pixels = film.width * film.height;
     let n_paths = buffers.radius.light_paths_for(method, pixels as u64);
-    // N as the estimators count it (but for a planted fault, N).
+    // N as the estimators count it (the pixels under the planted fault).
     let n_counted = if faults.light_paths_counted_per_pixel {
         pixels
     } else {
