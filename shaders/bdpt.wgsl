@@ -335,13 +335,18 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     let n_c = camera_radiance[band_index(index)].w;
     let path = index % frame.n_light_paths;
     let own = path >= frame.path_origin && path - frame.path_origin < frame.path_count;
+    // Without merging, a pixel has nothing to do in the waves of other light subpaths; its own
+    // wave stores its radiance.
+    if !own && !merges() {
+        return;
+    }
     let pixels = frame.camera.width * frame.camera.height;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
         let sampler = Sampler(frame.seed, index + k * pixels, frame.first_sample);
         radiance += trace_camera_path(x, y, n_c, sampler, path, own);
     }
-    // BDPT's waves each cover their own pixels; a merging iteration's first wave covers all.
+    // BDPT's pixels are each in one wave; a merging iteration's first wave covers all.
     var before = vec3<f32>(0.0);
     if merges() && frame.path_origin > 0u {
         before = camera_radiance[band_index(index)].xyz;

@@ -2,7 +2,7 @@
 //! when the image is larger than one storage binding (lavapipe: 128 MiB, 2048 x 2048), and the
 //! methods that splat refuse such an image plainly before any work.
 
-use crate::common::{empty_temp_dir, gpu, hexray_command, Render};
+use crate::common::{default_radius, empty_temp_dir, gpu, hexray_command, Render};
 use hexray::film::output::read_exr;
 use hexray::film::Film;
 use hexray::transport::method::Method;
@@ -14,13 +14,19 @@ const H: u32 = 19;
 const SPP: u32 = 3;
 
 /// A GPU render of the band tests' image with `method`, in film bands of `rows` rows (None: as
-/// many as the buffers hold, here the whole image).
-fn render_in_bands(method: Method, rows: Option<u32>) -> Film {
-    let mut r = Render::file("scenes/tncg15_room.json")
+/// many as the buffers hold, here the whole image), with N = `light_paths` light subpaths an
+/// iteration (None: the default, one per pixel).
+fn render_in_bands(method: Method, rows: Option<u32>, light_paths: Option<u32>) -> Film {
+    let mut render = Render::file("scenes/tncg15_room.json")
         .size(W, H)
         .seed(7)
-        .method(method)
-        .gpu_renderer();
+        .method(method);
+    if light_paths.is_some() {
+        let mut radius = default_radius("scenes/tncg15_room.json", method);
+        radius.light_paths = light_paths;
+        render = render.radius(radius);
+    }
+    let mut r = render.gpu_renderer();
     if let Some(rows) = rows {
         r.set_film_rows(rows);
     }
@@ -40,8 +46,8 @@ fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
         return;
     }
     let (w, spp) = (W, SPP);
-    let whole = render_in_bands(Method::Path, None);
-    let banded = render_in_bands(Method::Path, Some(5));
+    let whole = render_in_bands(Method::Path, None, None);
+    let banded = render_in_bands(Method::Path, Some(5), None);
     for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
         assert_eq!(a.n, spp as u64, "pixel {i}");
         assert_eq!(
@@ -61,7 +67,8 @@ fn path_tracing_in_film_bands_equals_one_band_bit_for_bit() {
 /// in another order. The iterations' image means (batch means) agree to f32 rounding too (each
 /// workgroup sums its pixels in f32 before its fixed-point add, and bands group the pixels into
 /// other workgroups). A band that splatted only the light subpaths of its own rows, or folded
-/// at the wrong row, fails.
+/// at the wrong row, fails. Light tracing and BDPT also with 100 light subpaths for the 456
+/// pixels, which every band's pixels share.
 #[test]
 fn splatting_methods_in_film_bands_equal_one_band() {
     if gpu().is_none() {
@@ -69,9 +76,16 @@ fn splatting_methods_in_film_bands_equal_one_band() {
     }
     let (w, spp) = (W, SPP);
     let rel = |x: f64, y: f64| (x - y).abs() / x.abs().max(1e-30);
-    for method in [Method::Light, Method::Bdpt, Method::Sppm, Method::Vcm] {
-        let whole = render_in_bands(method, None);
-        let banded = render_in_bands(method, Some(5));
+    for (method, n) in [
+        (Method::Light, None),
+        (Method::Light, Some(100)),
+        (Method::Bdpt, None),
+        (Method::Bdpt, Some(100)),
+        (Method::Sppm, None),
+        (Method::Vcm, None),
+    ] {
+        let whole = render_in_bands(method, None, n);
+        let banded = render_in_bands(method, Some(5), n);
         for (i, (a, b)) in whole.pixels.iter().zip(&banded.pixels).enumerate() {
             let at = format!("{method}: pixel {i} (row {}): {a:?} {b:?}", i as u32 / w);
             assert_eq!((a.n, b.n), (spp as u64, spp as u64), "{at}");

@@ -1,4 +1,4 @@
-//! The merging methods' light subpaths per iteration N (`hexray::transport::merging::light_paths`).
+//! The light subpaths per iteration N (`hexray::transport::merging::light_paths`).
 //! With fewer than one per pixel the camera subpaths share them (pixel index mod N), and the
 //! kernel's normalisation, the splats and the MIS weights count N: the image is the one of one
 //! light subpath per pixel, only noisier. Each comparison is of two independent renders (other
@@ -60,6 +60,18 @@ on_each_backend! {
     /// So is sppm's, whose image is all merges.
     fn fewer_light_subpaths_than_pixels_leave_the_sppm_image_unchanged(backend) {
         let p = quarter_parity(backend, Method::Sppm, Faults::NONE);
+        assert!(p.same(), "{p}");
+    }
+
+    /// So is bdpt's, whose camera subpaths connect to shared light subpaths.
+    fn fewer_light_subpaths_than_pixels_leave_the_bdpt_image_unchanged(backend) {
+        let p = quarter_parity(backend, Method::Bdpt, Faults::NONE);
+        assert!(p.same(), "{p}");
+    }
+
+    /// So is light tracing's, whose image is all splats.
+    fn fewer_light_subpaths_than_pixels_leave_the_light_tracing_image_unchanged(backend) {
+        let p = quarter_parity(backend, Method::Light, Faults::NONE);
         assert!(p.same(), "{p}");
     }
 }

@@ -63,9 +63,10 @@ pub(crate) struct RenderArgs {
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
-    /// Light subpaths per iteration N of sppm, vcm and vcm-full, at most one per pixel (more are
-    /// cut to that). Default: one per pixel up to 262144 (512x512); beyond, the camera subpaths
-    /// share them (pixel index mod N), so an iteration's cost grows as its pixels.
+    /// Light subpaths per iteration N of every method but path, at most one per pixel (more are
+    /// cut to that). Default: one per pixel, up to 262144 (512x512) for sppm, vcm and vcm-full
+    /// and 1048576 for light and bdpt; beyond, the camera subpaths share them (pixel index mod
+    /// N), so an iteration's cost grows as its pixels.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) light_paths: Option<u32>,
     /// Shadow rays (light samples) per diffuse vertex, each weighted by multi-sample MIS
@@ -158,10 +159,15 @@ pub(crate) fn merge_radius_of(
     flat: &FlatScene,
     camera: &Camera,
 ) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
-    if !method.merges() && (radius.is_some() || alpha.is_some() || light_paths.is_some()) {
+    if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
-            "--radius, --alpha and --light-paths are for --method sppm, vcm and vcm-full, not \
-             {method}"
+            "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
+        ));
+    }
+    if !method.splats() && light_paths.is_some() {
+        return Err(format!(
+            "--light-paths is for the methods that trace light subpaths (light, bdpt, sppm, vcm, \
+             vcm-full), not {method}"
         ));
     }
     let mut r = hexray::transport::merging::MergeRadius::default_for(flat, camera, method);
@@ -224,6 +230,7 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
     args.radius = id.merge_radius;
     args.reach = id.merge_reach;
     args.alpha = id.merge_alpha;
+    args.light_paths = id.light_paths;
     args.scene.get_or_insert_with(|| PathBuf::from(&id.scene));
     args.out.get_or_insert_with(|| exr.to_path_buf());
     Ok((film, id))
@@ -688,6 +695,7 @@ impl Record<'_> {
             merge_radius: merges.then_some(self.radius.initial),
             merge_reach: (merges && self.radius.reach > 0.0).then_some(self.radius.reach),
             merge_alpha: merges.then_some(self.radius.alpha),
+            light_paths: self.radius.light_paths,
             scene: self.scene_path.display().to_string(),
             scene_sha1: self.scene.sha1.clone(),
             render_seconds: self.earlier_seconds + seconds,

@@ -189,7 +189,7 @@ impl LightPassBuffers {
 
 /// Adds iterations `first..first + count` of light tracing, BDPT, SPPM or VCM to `film`. Each
 /// iteration traces N light subpaths (light pass, splatting into `buffers.splats`; N is one per
-/// pixel, for the merging methods at most `merging::MAX_LIGHT_PATHS`), builds the hash grid of
+/// pixel up to a bound, `merging::light_paths`), builds the hash grid of
 /// their vertices (merging, with iteration i's radius), then n_c camera subpaths per pixel
 /// (`subpath::camera_subpaths`; not for light tracing) that connect to light subpath
 /// (pixel index mod N) and merge with every light subpath's vertices; each pixel's value for
@@ -295,8 +295,8 @@ struct Iteration<'a> {
     s: u32,
     method: Method,
     faults: Faults,
-    /// N, the light subpaths of an iteration: one per pixel, for the merging methods at most
-    /// `merging::MAX_LIGHT_PATHS` (`merging::light_paths`).
+    /// N, the light subpaths of an iteration: one per pixel up to a bound
+    /// (`merging::light_paths`).
     n_paths: u32,
     /// N as the kernel, the splats and the MIS weights count it: `n_paths` (but for the planted
     /// fault `Faults::light_paths_counted_per_pixel`).

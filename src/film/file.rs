@@ -53,6 +53,9 @@ pub struct FilmIdentity {
     /// (`MergeRadius::reach`; absent where the radius is the same at every vertex).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merge_reach: Option<f32>,
+    /// `--light-paths` as asked for (absent where N took its default, `merging::light_paths`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light_paths: Option<u32>,
     /// The scene file as given, and the SHA-1 of its bytes.
     pub scene: String,
     pub scene_sha1: String,
@@ -231,6 +234,7 @@ mod tests {
             merge_radius: Some(0.012_345_679),
             merge_alpha: Some(0.75),
             merge_reach: Some(7.5),
+            light_paths: Some(1000),
             scene: "scenes/x.json".into(),
             scene_sha1: "0123".into(),
             render_seconds: 1.5,

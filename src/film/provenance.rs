@@ -18,18 +18,11 @@ pub fn bidirectional_provenance(
 }
 
 /// The merging methods' radius for a render's provenance: the largest r_1 (scene units), α,
-/// the view's reach at which a camera vertex takes r_1 ("uniform" where every vertex does), and
-/// N, the light subpaths of an iteration of `method` on an image of `pixels`.
+/// and the view's reach at which a camera vertex takes r_1 ("uniform" where every vertex does).
 pub fn merging_provenance(
     radius: &crate::transport::merging::MergeRadius,
-    method: crate::transport::method::Method,
-    pixels: u64,
 ) -> Vec<(&'static str, String)> {
     vec![
-        (
-            "light_paths",
-            radius.light_paths_for(method, pixels).to_string(),
-        ),
         ("merge_radius", format!("{:e}", radius.initial)),
         ("merge_alpha", format!("{}", radius.alpha)),
         (

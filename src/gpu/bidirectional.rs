@@ -2,8 +2,8 @@
 //! `shaders/bdpt.wgsl` and the resolve pass of `shaders/film.wgsl`.
 //!
 //! Each iteration is a sequence of dispatches over the same buffers, as on the CPU
-//! (`cpu::render_iterations`): the light pass traces N light subpaths (one per pixel; the merging
-//! methods at most `merging::MAX_LIGHT_PATHS`), splatting their connections to the camera into
+//! (`cpu::render_iterations`): the light pass traces N light subpaths (one per pixel, at most
+//! `merging::MAX_LIGHT_PATHS` or `MAX_CONNECTED_LIGHT_PATHS`; `merging::light_paths`), splatting their connections to the camera into
 //! order-independent fixed-point tallies and (BDPT) storing their diffuse vertices in a pool;
 //! the camera pass traces one camera subpath per pixel and connects it to light subpath (pixel
 //! index mod N); the resolve pass adds each pixel's camera radiance and splats as one sample,
@@ -108,6 +108,8 @@ pub struct Bidirectional {
     pub(in crate::gpu) specular: Vec<bool>,
     /// n_c in those pixels (`subpath::specular_camera_subpaths`).
     pub(in crate::gpu) specular_camera_subpaths: u32,
+    /// N asked for (`--light-paths`, `MergeRadius::light_paths`; None: the default).
+    pub(in crate::gpu) requested_light_paths: Option<u32>,
 }
 
 /// The camera radiance buffer's lanes at the start of an iteration, (0, 0, 0, n_c), per pixel.
@@ -277,6 +279,7 @@ impl Bidirectional {
             retraced: 0,
             specular,
             specular_camera_subpaths,
+            requested_light_paths: None,
         })
     }
 }

@@ -66,12 +66,13 @@ impl Backend for CpuBackend<'_> {
             ),
             _ => Vec::new(),
         };
-        if let (Some(b), true) = (&self.buffers, self.method.merges()) {
-            out.extend(merging_provenance(
-                &b.radius,
-                self.method,
-                b.camera_subpaths.len() as u64,
-            ));
+        if let Some(b) = &self.buffers {
+            let pixels = self.camera.width as u64 * self.camera.height as u64;
+            let n = b.radius.light_paths_for(self.method, pixels);
+            out.push(("light_paths", n.to_string()));
+            if self.method.merges() {
+                out.extend(merging_provenance(&b.radius));
+            }
         }
         out
     }

@@ -110,17 +110,29 @@ const VIEW_PROBE_BOUNCES: u32 = 16;
 /// lavapipe's 128 MiB binding (80 bytes each).
 pub const MAX_LIGHT_PATHS: u32 = 1 << 18;
 
+/// The most light subpaths N an iteration of light tracing and BDPT traces by default: 2^20,
+/// one per pixel up to a megapixel. Their connections to the camera splat anywhere in the
+/// image, so on a GPU whose binding cannot hold every pixel's splat tally at once, each film
+/// band of b pixels traces all N subpaths again (`GpuRenderer::for_each_film_band`): an image
+/// of P pixels then costs about (P / b + 1) · N subpaths an iteration, at most 2 P with N <= b.
+/// A band of lavapipe's 128 MiB binding holds 3.7 million pixels, so with N bounded so an
+/// iteration's cost grows as its pixels on every device; beyond a megapixel, pixels share light
+/// subpaths (pixel index mod N) as the merging methods' do beyond [`MAX_LIGHT_PATHS`].
+pub const MAX_CONNECTED_LIGHT_PATHS: u32 = 1 << 20;
+
 /// N, the light subpaths per iteration of `method` on an image of `pixels`: `requested` if given
-/// (`--light-paths`, merging methods only), else one per pixel, for the merging methods at most
-/// [`MAX_LIGHT_PATHS`]. Light tracing and BDPT trace one per pixel: each camera subpath of BDPT
-/// connects to the light subpath of its own pixel, wave by wave.
+/// (`--light-paths`), else one per pixel, at most [`MAX_LIGHT_PATHS`] for the merging methods
+/// and [`MAX_CONNECTED_LIGHT_PATHS`] for light tracing and BDPT; never more than the pixels.
+/// Pixel j's camera subpaths connect to light subpath j mod N.
 pub fn light_paths(method: Method, pixels: u64, requested: Option<u32>) -> u32 {
     let per_pixel = pixels.min(u32::MAX as u64) as u32;
-    if !method.merges() {
-        return per_pixel;
-    }
+    let most = if method.merges() {
+        MAX_LIGHT_PATHS
+    } else {
+        MAX_CONNECTED_LIGHT_PATHS
+    };
     requested
-        .unwrap_or_else(|| per_pixel.min(MAX_LIGHT_PATHS))
+        .unwrap_or_else(|| per_pixel.min(most))
         .clamp(1, per_pixel.max(1))
 }
 
@@ -175,14 +187,15 @@ impl MergeRadius {
         }
     }
 
-    /// N of `method` on an image of `pixels` ([`light_paths`]); one per pixel at radius 0 (vcm
-    /// is then BDPT).
+    /// N of `method` on an image of `pixels` ([`light_paths`]); BDPT's at radius 0 (vcm is then
+    /// BDPT).
     pub fn light_paths_for(&self, method: Method, pixels: u64) -> u32 {
-        if self.initial > 0.0 {
-            light_paths(method, pixels, self.light_paths)
+        let method = if self.initial > 0.0 {
+            method
         } else {
-            light_paths(Method::Bdpt, pixels, None)
-        }
+            Method::Bdpt
+        };
+        light_paths(method, pixels, self.light_paths)
     }
 
     /// This radius at [`HARDWARE_GPU_RADIUS_SCALE`] of r_1, α and the reach kept.

@@ -12,7 +12,7 @@ use crate::gpu::bidirectional::{
 };
 use crate::gpu::frame::{image_cells_word, vertex_counter_word, CELL_WORDS, WORKGROUP};
 use crate::gpu::frame::{Frame, MAX_PASS_SPP, TARGET_DISPATCH_SECONDS};
-use crate::transport::merging::{kernel_normalization, MergeRadius};
+use crate::transport::merging::{self, kernel_normalization, MergeRadius};
 use crate::transport::method::Method;
 use crate::transport::subpath::LightVertex;
 use crate::transport::subpath::MergeMis;
@@ -35,38 +35,46 @@ impl GpuRenderer {
         self.frame.vertex_capacity = b.capacity;
     }
 
+    /// N, the light subpaths of an iteration (`merging::light_paths`), as on the CPU.
+    fn light_paths(&self) -> u32 {
+        let (w, h) = (self.frame.camera.width, self.frame.camera.height);
+        let pixels = w as u64 * h as u64;
+        let b = self.bidirectional.as_ref().expect("light subpath buffers");
+        match &b.merging {
+            Some(m) => m.radius.light_paths_for(self.method, pixels),
+            None => merging::light_paths(self.method, pixels, b.requested_light_paths),
+        }
+    }
+
     /// What the method chose or met (`Backend::provenance`): for BDPT its τ and n_c, and the
     /// iterations traced again after a wave overflowed the light-vertex pool.
     pub fn provenance(&self) -> Vec<(&'static str, String)> {
-        match &self.bidirectional {
-            Some(b) if b.camera_pipeline.is_some() => {
-                let mut v = if self.method.connects() {
-                    crate::film::provenance::bidirectional_provenance(
-                        self.frame.shadow_threshold,
-                        b.specular_camera_subpaths,
-                        b.specular.iter().filter(|&&s| s).count(),
-                    )
-                } else {
-                    Vec::new()
-                };
-                if let Some(m) = &b.merging {
-                    v.extend(crate::film::provenance::merging_provenance(
-                        &m.radius,
-                        self.method,
-                        self.frame.camera.width as u64 * self.frame.camera.height as u64,
-                    ));
-                }
-                v.push((
-                    "light_vertex_pool",
-                    format!(
-                        "{} vertices, {} iterations traced again",
-                        b.capacity, b.retraced
-                    ),
-                ));
-                v
-            }
-            _ => Vec::new(),
+        let Some(b) = &self.bidirectional else {
+            return Vec::new();
+        };
+        let mut v = if self.method.connects() {
+            crate::film::provenance::bidirectional_provenance(
+                self.frame.shadow_threshold,
+                b.specular_camera_subpaths,
+                b.specular.iter().filter(|&&s| s).count(),
+            )
+        } else {
+            Vec::new()
+        };
+        v.push(("light_paths", self.light_paths().to_string()));
+        if let Some(m) = &b.merging {
+            v.extend(crate::film::provenance::merging_provenance(&m.radius));
         }
+        if b.camera_pipeline.is_some() {
+            v.push((
+                "light_vertex_pool",
+                format!(
+                    "{} vertices, {} iterations traced again",
+                    b.capacity, b.retraced
+                ),
+            ));
+        }
+        v
     }
 
     /// One pass of light tracing or BDPT: iterations `first..first + count` (at most
@@ -123,6 +131,7 @@ impl GpuRenderer {
         if let Some(m) = b.merging.as_mut() {
             m.radius = radius;
         }
+        b.requested_light_paths = radius.light_paths;
         if method != Method::Light {
             let count = crate::transport::subpath::specular_camera_subpaths(method, radius.initial);
             b.specular_camera_subpaths = count;
@@ -380,12 +389,9 @@ impl GpuRenderer {
         let start = Instant::now();
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let pixels = w as u64 * h as u64;
+        let n_paths = self.light_paths();
         let b = self.bidirectional.as_ref().expect("light subpath buffers");
         let band_pixels = b.band_pixels;
-        // N, the light subpaths of an iteration (`merging::light_paths`), as on the CPU.
-        let n_paths = b.merging.as_ref().map_or(pixels as u32, |m| {
-            m.radius.light_paths_for(self.method, pixels)
-        });
         // Light subpaths per wave: as many as the pool holds at the measured vertices per
         // subpath, and at most a band's pixels (the pool's path heads are a band's); whole rows
         // of the image for BDPT, whose camera pass covers the wave's own pixels. A merging
@@ -452,9 +458,8 @@ impl GpuRenderer {
                     ..self.frame
                 };
                 // Wave by wave: light subpaths p0..p1 (with the pool's counter cleared before
-                // each), then the camera subpaths: BDPT's of the wave's pixels (rows p0 / w ..
-                // p1 / w, N being the pixels) in the film band, a merging method's of the whole
-                // film band.
+                // each), then the camera subpaths in the film band: BDPT's of the pixels whose
+                // light subpath is the wave's (`own_rows`), a merging method's of every pixel.
                 let mut p0 = 0;
                 while p0 < n_paths {
                     let p1 = (p0 + wave_paths).min(n_paths);
@@ -476,8 +481,9 @@ impl GpuRenderer {
                             self.build_grid(&wave, radius);
                             (band_start, band_end)
                         } else {
-                            ((p0 / w).max(band_start), p1.div_ceil(w).min(band_end))
+                            own_rows(p0, p1, n_paths, w, h)
                         };
+                        let (a, z) = (a.max(band_start), z.min(band_end));
                         if a < z && !self.row_dispatches(camera, &wave, a, z, stop, checked) {
                             return false;
                         }
@@ -577,5 +583,16 @@ impl GpuRenderer {
                 ((paths_per_second * TARGET_DISPATCH_SECONDS) as u64).clamp(4096, 1 << 28);
         }
         Ok(Some(overflowed))
+    }
+}
+
+/// The rows that hold the pixels whose light subpath (pixel index mod `n_paths`) is one of
+/// `p0..p1`, on an image `w` x `h`: the wave's own rows where N is the pixels, all rows where
+/// the pixels share light subpaths (their camera pass skips the pixels the wave does not own).
+fn own_rows(p0: u32, p1: u32, n_paths: u32, w: u32, h: u32) -> (u32, u32) {
+    if (n_paths as u64) < w as u64 * h as u64 {
+        (0, h)
+    } else {
+        (p0 / w, p1.div_ceil(w))
     }
 }
