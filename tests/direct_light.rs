@@ -27,7 +27,7 @@ fn truth() -> [f64; 3] {
     [0, 1, 2].map(|c| albedo[c] * le[c] * f)
 }
 
-fn check(film: &hexray::film::Film, what: &str) {
+pub(crate) fn check(film: &hexray::film::Film, what: &str) {
     let truth = truth();
     let (_, se) = film.image_mean();
     // Resolves a 1 % error.
@@ -38,7 +38,7 @@ fn check(film: &hexray::film::Film, what: &str) {
     assert_mean_within_4_se(film, truth, what);
 }
 
-const SCENE: &str = "scenes/analytic/direct_light.json";
+pub(crate) const SCENE: &str = "scenes/analytic/direct_light.json";
 
 #[test]
 fn radiance_under_a_square_emitter_matches_the_form_factor() {

@@ -217,6 +217,7 @@ macro_rules! rust_constants {
 fn shared_constants() -> Vec<(&'static str, f64)> {
     use hexray::accel::hash_grid::QUERY_MARGIN;
     use hexray::cpu::path::{RR_MAX_SURVIVAL, RR_START_BOUNCE};
+    use hexray::cpu::whitted::WHITTED_MAX_DEPTH;
     use hexray::gpu::bidirectional::SCAN_BLOCK;
     use hexray::layout::{
         EMPTY_SLOT, KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, NOT_AN_EMITTER,
@@ -253,6 +254,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         COPLANAR_OFFSET,
         FOOTPRINT_FLOOR,
         QUERY_MARGIN,
+        WHITTED_MAX_DEPTH,
     )
 }
 

@@ -51,3 +51,4 @@ mod stability_thin;
 mod stability_tiny_light;
 mod standard_error;
 mod tessellation;
+mod whitted;

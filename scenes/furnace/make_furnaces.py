@@ -76,3 +76,12 @@ write("mirror_sphere", scene("furnace_mirror_sphere", 0.5,
 write("glass_sphere", scene("furnace_glass_sphere", 0.5,
                             [{"center": [0.4, 0.0, 0.0], "radius": 0.45, "material": "glass"}],
                             "glass sphere of index 1.5 and tint 1 in a furnace"))
+# The black furnace: walls that emit 1 and reflect nothing, with a mirror sphere and a glass
+# sphere (tint 1). Every wall is 1, straight or in the spheres, so any method that follows
+# mirrors and glass without loss sees 1 everywhere: Whitted ray tracing's specular transport
+# against an exact answer (tests/whitted.rs), where the diffuse furnaces' indirect light is
+# what Whitted leaves out.
+write("black_specular", scene("furnace_black_specular", 0.0,
+                              [{"center": [0.4, -0.45, 0.0], "radius": 0.35, "material": "mirror"},
+                               {"center": [0.4, 0.45, 0.0], "radius": 0.35, "material": "glass"}],
+                              "mirror and glass spheres in a furnace of black emitters"))

@@ -31,12 +31,14 @@ pub struct Comparison {
     /// subtracted when the reference is not much longer than the candidate.
     pub relmse_reference_noise: Option<f64>,
     /// What the figures do not say: e.g. that an image was rendered by a consistent method
-    /// (sppm, vcm), whose standard error covers its noise but not its bias.
+    /// (sppm, vcm) or a biased one (whitted), whose standard error covers its noise but not its
+    /// bias.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
 
-/// The note for an image rendered by a merging method (its EXR metadata's `method`), if it was.
+/// The note for an image rendered by a merging method or a biased one (its EXR metadata's
+/// `method`), if it was.
 pub fn consistency_note(what: &str, path: &Path) -> Option<String> {
     if path
         .extension()
@@ -46,6 +48,12 @@ pub fn consistency_note(what: &str, path: &Path) -> Option<String> {
     }
     let (_, meta) = read_exr(path).ok()?;
     let method = crate::transport::method::Method::from_name(meta.get("method")?)?;
+    if let Some(omitted) = method.omits() {
+        return Some(format!(
+            "the {what} was rendered with {method}, which is biased: it leaves out {omitted}, \
+             and its variance (and so the z and 5 s.e. figures) covers its noise only"
+        ));
+    }
     method.merges().then(|| {
         format!(
             "the {what} was rendered with {method}, which is consistent, not unbiased: its \

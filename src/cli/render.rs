@@ -42,7 +42,8 @@ pub(crate) struct RenderArgs {
     /// stay black); `light`, `bdpt`, `sppm`, `vcm` and `vcm-full` take one iteration (a light
     /// subpath and a camera subpath per pixel) per sample. `sppm`, `vcm` and `vcm-full` merge
     /// photons: consistent, not unbiased (the bias shrinks with the radius over iterations; the
-    /// standard error does not cover it). Default: vcm for `render` (the lowest error at equal
+    /// standard error does not cover it). `whitted` is biased: direct light and perfect mirrors
+    /// and glass only, without indirect diffuse light or caustics. Default: vcm for `render` (the lowest error at equal
     /// time on the reference scenes, docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
@@ -683,6 +684,9 @@ impl Record<'_> {
         meta.set("dropped_samples", film.dropped());
         meta.set("width", args.width);
         meta.set("height", args.height);
+        if let Some(omitted) = method.omits() {
+            meta.set("omits", omitted);
+        }
         let merges = method.merges();
         let id = FilmIdentity {
             version: FilmIdentity::VERSION,
@@ -810,6 +814,11 @@ fn summarise(
             radius.initial,
             radius.at((film.spp() as u32).saturating_sub(1)),
             radius.alpha
+        );
+    }
+    if let Some(omitted) = method.omits() {
+        eprintln!(
+            "{method} is biased: it leaves out {omitted}; the standard error covers its noise only"
         );
     }
     for (key, value) in provenance {

@@ -7,6 +7,7 @@ pub mod light_path;
 pub mod path;
 pub mod path_wavefront;
 pub mod shadow_probe;
+pub mod whitted;
 
 use crate::transport::faults::Faults;
 pub use path::trace_path;
@@ -74,6 +75,71 @@ pub fn render_pass_until(
     film: &mut Film,
     stop: &AtomicBool,
 ) -> u64 {
+    // The tile's pixels, their paths traced together (`path_wavefront::trace_pixels`).
+    render_tiles_until(film, stop, |tile, stats, rays| {
+        path_wavefront::trace_pixels(
+            scene,
+            camera,
+            tile,
+            seed,
+            first,
+            count,
+            light_samples,
+            faults,
+            stats,
+            rays,
+        )
+    })
+}
+
+/// Adds samples `first..first + count` of Whitted ray tracing (`whitted::trace_whitted`) to
+/// every pixel of `film`, with rayon over tiles, as [`render_pass`] does path tracing's.
+/// Returns the number of rays traced.
+pub fn render_whitted_pass(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    first: u32,
+    count: u32,
+    faults: Faults,
+    film: &mut Film,
+) -> u64 {
+    render_whitted_pass_until(scene, camera, seed, first, count, faults, film, &NEVER)
+}
+
+/// [`render_whitted_pass`] until `stop` is set, as [`render_pass_until`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_whitted_pass_until(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    first: u32,
+    count: u32,
+    faults: Faults,
+    film: &mut Film,
+    stop: &AtomicBool,
+) -> u64 {
+    render_tiles_until(film, stop, |tile, stats, rays| {
+        for (&(index, x, y), stats) in tile.iter().zip(stats) {
+            for s in first..first + count {
+                let sampler = Sampler::new(seed, index, s);
+                stats.add(whitted::trace_whitted(
+                    scene, camera, x, y, &sampler, faults, rays,
+                ));
+            }
+        }
+    })
+}
+
+/// Runs `trace_tile` over the image's tiles in parallel, each with its pixels (index, x, y),
+/// their statistics so far to add samples to, and a ray counter; puts the tiles' statistics
+/// into `film`, unless `stop` was set, which skips the tiles not yet begun and leaves `film` as
+/// it was. Returns the number of rays traced.
+fn render_tiles_until(
+    film: &mut Film,
+    stop: &AtomicBool,
+    trace_tile: impl Fn(&[(u32, u32, u32)], &mut [PixelStats], &mut u64) + Sync,
+) -> u64 {
     let (w, h) = (film.width, film.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
@@ -86,7 +152,6 @@ pub fn render_pass_until(
             if stop.load(Ordering::Relaxed) {
                 return (Vec::new(), 0);
             }
-            // The tile's pixels, their paths traced together (`path_wavefront::trace_pixels`).
             let mut tile = Vec::with_capacity((TILE * TILE) as usize);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
@@ -96,18 +161,7 @@ pub fn render_pass_until(
             let mut stats: Vec<PixelStats> =
                 tile.iter().map(|&(i, _, _)| pixels[i as usize]).collect();
             let mut rays = 0u64;
-            path_wavefront::trace_pixels(
-                scene,
-                camera,
-                &tile,
-                seed,
-                first,
-                count,
-                light_samples,
-                faults,
-                &mut stats,
-                &mut rays,
-            );
+            trace_tile(&tile, &mut stats, &mut rays);
             let out: Vec<(usize, PixelStats)> = tile
                 .iter()
                 .zip(stats)

@@ -102,6 +102,14 @@ impl Backend for CpuBackend<'_> {
             return Ok(());
         }
         check_film_for(method, film)?;
+        if method == crate::transport::method::Method::Whitted {
+            self.rays += self.pool.install(|| {
+                crate::cpu::render_whitted_pass_until(
+                    scene, camera, seed, first, count, faults, film, stop,
+                )
+            });
+            return Ok(());
+        }
         self.rays += self.pool.install(|| {
             crate::cpu::render_pass_until(
                 scene,

@@ -32,6 +32,11 @@ pub enum Method {
     /// `--radius 0`, where it is bdpt) and photon merging at every diffuse camera vertex, all
     /// weighed by MIS. Consistent, not unbiased.
     VcmFull,
+    /// Whitted ray tracing (`src/cpu/whitted.rs`): direct light at each diffuse surface the
+    /// camera sees, and perfect reflection and refraction at mirrors and glass, both followed.
+    /// Biased: it leaves out indirect diffuse light and caustics (light that reaches a diffuse
+    /// surface by way of a mirror or glass).
+    Whitted,
 }
 
 impl Method {
@@ -46,7 +51,7 @@ impl Method {
 
     /// Samples (iterations) when neither `--spp` nor `--time` is given, so that the default
     /// render (tncg15_room, 512x512) takes about as long as path tracing's 64 samples: 64 of
-    /// path tracing; 8 of the methods that trace a light subpath and a camera subpath per pixel
+    /// path tracing and of Whitted (whose samples cost less); 8 of the methods that trace a light subpath and a camera subpath per pixel
     /// and iteration, which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost
     /// more as the image grows, since every pixel adds a photon). vcm took 20 while its radius
     /// was 0.01 of the scene's; within the clearance at 0.03 its merges gather nine times the
@@ -54,7 +59,7 @@ impl Method {
     /// 20 iterations of vcm in 17.1 s, 7 in 6.3 s).
     pub fn default_samples(self) -> u32 {
         match self {
-            Method::Path => 64,
+            Method::Path | Method::Whitted => 64,
             _ => 8,
         }
     }
@@ -67,6 +72,7 @@ impl Method {
             Method::Sppm => "sppm",
             Method::Vcm => "vcm",
             Method::VcmFull => "vcm-full",
+            Method::Whitted => "whitted",
         }
     }
 
@@ -82,7 +88,20 @@ impl Method {
     /// (splatted or merged), so that an iteration's pixels share samples and its statistics
     /// are batch means (`film.rs`).
     pub fn splats(self) -> bool {
-        !matches!(self, Method::Path)
+        !matches!(self, Method::Path | Method::Whitted)
+    }
+
+    /// The light the method leaves out by construction, a bias that no number of samples
+    /// removes, for the summary line, the EXR metadata (`omits`) and `hexray compare`; None for
+    /// the unbiased methods and the merging ones (whose bias shrinks with the radius).
+    pub fn omits(self) -> Option<&'static str> {
+        match self {
+            Method::Whitted => Some(
+                "indirect diffuse light and caustics (light that reaches a diffuse surface by way \
+                 of a mirror or glass)",
+            ),
+            _ => None,
+        }
     }
 
     /// Whether the method merges photons: consistent rather than unbiased, with a bias that

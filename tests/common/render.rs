@@ -7,7 +7,7 @@
 
 use super::{load, repo};
 use hexray::cpu::shadow_probe::shadow_threshold_for;
-use hexray::cpu::{render_iterations, render_pass, LightPassBuffers};
+use hexray::cpu::{render_iterations, render_pass, render_whitted_pass, LightPassBuffers};
 use hexray::film::Film;
 use hexray::gpu::{Checks, GpuRenderer, Residency};
 use hexray::layout::FlatScene;
@@ -166,6 +166,16 @@ impl<'a> Render<'a> {
                 self.method,
                 self.faults,
                 &mut buffers,
+                &mut film,
+            );
+        } else if self.method == Method::Whitted {
+            render_whitted_pass(
+                &flat,
+                &camera,
+                self.seed,
+                0,
+                self.spp,
+                self.faults,
                 &mut film,
             );
         } else {

@@ -199,8 +199,12 @@ impl GpuRenderer {
             )?;
             (None, Some(b))
         } else {
+            let entry = match method {
+                Method::Whitted => "whitted_pass",
+                _ => "render_pass",
+            };
             (
-                Some(compute_pipeline(device, &module, &[&layout], "render_pass")),
+                Some(compute_pipeline(device, &module, &[&layout], entry)),
                 None,
             )
         };
