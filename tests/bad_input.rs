@@ -388,6 +388,8 @@ fn bad_arguments_exit_2_before_rendering() {
         vec!["--exposure", "inf"],
         vec!["--checkpoint", "0"],
         vec!["--light-paths", "0"],
+        vec!["--target-error", "0"],
+        vec!["--target-error", "-1e-3"],
         vec!["--method", "path", "--light-paths", "1000"],
     ] {
         let mut all = vec![

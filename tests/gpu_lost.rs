@@ -72,7 +72,7 @@ fn a_lost_device_keeps_the_samples_taken_before() {
     let mut film = Film::new(16, 16);
     let budget = Budget {
         spp: Some(100),
-        seconds: None,
+        ..Budget::default()
     };
     let report = render_progressive(
         &mut backend,

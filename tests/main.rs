@@ -50,5 +50,6 @@ mod stability_tangent;
 mod stability_thin;
 mod stability_tiny_light;
 mod standard_error;
+mod target_error;
 mod tessellation;
 mod whitted;

@@ -8,8 +8,7 @@ use anyhow::{bail, Result};
 use serde::Serialize;
 use std::path::Path;
 
-/// The relMSE denominator's offset: keeps dark pixels from dominating (pbrt, Mitsuba).
-pub const RELMSE_EPSILON: f64 = 0.01;
+pub use crate::film::RELMSE_EPSILON;
 
 /// What `compare` reports.
 #[derive(Clone, Debug, Serialize, PartialEq)]

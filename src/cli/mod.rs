@@ -84,6 +84,13 @@ pub(crate) fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
     }
 }
 
+pub(crate) fn parse_target_error(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a relMSE above 0, found {s:?}")),
+    }
+}
+
 pub(crate) fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
     match s.parse::<f32>() {
         Ok(x) if x.is_finite() => Ok(x),

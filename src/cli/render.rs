@@ -82,6 +82,12 @@ pub(crate) struct RenderArgs {
     /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
     #[arg(long, value_parser = parse_seconds)]
     pub(crate) time: Option<f64>,
+    /// Error target: stop once the image's estimated relMSE (mean over pixels of the variance
+    /// of the mean over (mean² + 0.01), what `hexray compare` measures against a reference) is
+    /// at most E, looked at from 16 samples per pixel on. With --spp or --time, whichever comes
+    /// first. A method's bias (merging, whitted) is not in the estimate.
+    #[arg(long, value_name = "E", value_parser = parse_target_error)]
+    pub(crate) target_error: Option<f64>,
     /// Seed of the random streams; renders with different seeds are independent.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u32,
@@ -500,12 +506,13 @@ fn check_light_samples(args: &RenderArgs, method: Method) -> Step<()> {
 /// When to stop. --spp is the total: a resumed render adds what is missing.
 fn budget_of(args: &RenderArgs, method: Method, before: u64) -> Budget {
     Budget {
-        spp: match (args.spp, args.time) {
-            (Some(n), _) => Some(n - before as u32),
-            (None, None) => Some(method.default_samples()),
-            (None, Some(_)) => None,
+        spp: match (args.spp, args.time, args.target_error) {
+            (Some(n), _, _) => Some(n - before as u32),
+            (None, None, None) => Some(method.default_samples()),
+            _ => None,
         },
         seconds: args.time,
+        relmse: args.target_error,
     }
 }
 
@@ -687,6 +694,12 @@ impl Record<'_> {
         if let Some(omitted) = method.omits() {
             meta.set("omits", omitted);
         }
+        if let Some(target) = args.target_error {
+            meta.set("target_error", format!("{target:e}"));
+            if let Some(e) = film.estimated_relmse() {
+                meta.set("estimated_relmse", format!("{e:e}"));
+            }
+        }
         let merges = method.merges();
         let id = FilmIdentity {
             version: FilmIdentity::VERSION,
@@ -784,6 +797,7 @@ fn summarise(
     let why = match &report.reason {
         StopReason::SampleCount => "sample count reached",
         StopReason::TimeBudget => "time budget reached",
+        StopReason::ErrorTarget => "error target reached",
         StopReason::Interrupted => "interrupted; samples so far kept",
         StopReason::Failed(_) => "the backend failed; samples so far kept",
     };
@@ -819,6 +833,17 @@ fn summarise(
     if let Some(omitted) = method.omits() {
         eprintln!(
             "{method} is biased: it leaves out {omitted}; the standard error covers its noise only"
+        );
+    }
+    if let Some(target) = args.target_error {
+        let estimate = film.estimated_relmse().unwrap_or(f64::NAN);
+        eprintln!(
+            "estimated relMSE {estimate:.3e} (target {target:e}), from the pixels' variances{}",
+            if method.merges() || method.omits().is_some() {
+                "; the method's bias is not in it"
+            } else {
+                ""
+            }
         );
     }
     for (key, value) in provenance {

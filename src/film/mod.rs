@@ -71,6 +71,10 @@ impl PixelStats {
     }
 }
 
+/// The relMSE denominator's offset, mean (x − r)² / (r² + 0.01): keeps dark pixels from
+/// dominating (pbrt, Mitsuba; `hexray compare`).
+pub const RELMSE_EPSILON: f64 = 0.01;
+
 /// A whole image of pixel statistics, row 0 at the top.
 ///
 /// Methods that splat light subpaths into the pixels they are seen in (light tracing, BDPT) make
@@ -131,6 +135,27 @@ impl Film {
             .iter()
             .map(|p| p.var_of_mean().map(|x| x as f32))
             .collect()
+    }
+
+    /// The relMSE this film's image is expected to have against the exact image, from its own
+    /// noise: the mean over pixel-channels of var / (m² + 0.01), with m a pixel's mean and var
+    /// the estimated variance of that mean ([`PixelStats::var_of_mean`]), what
+    /// `hexray compare` measures against a reference, E (x − r)² = var + bias². Each pixel's
+    /// samples are independent (a path-traced sample, or an iteration, whose streams are its
+    /// own), so its variance is right even where an iteration's pixels share light subpaths. A
+    /// method's bias is not in it (merging, Whitted). None before two samples.
+    pub fn estimated_relmse(&self) -> Option<f64> {
+        if self.pixels.first().is_none_or(|p| p.n < 2) {
+            return None;
+        }
+        let mut sum = 0.0;
+        for p in &self.pixels {
+            let (m, v) = (p.mean(), p.var_of_mean());
+            for c in 0..3 {
+                sum += v[c] / (m[c] * m[c] + RELMSE_EPSILON);
+            }
+        }
+        Some(sum / (3 * self.pixels.len()) as f64)
     }
 
     /// The mean over all pixels, and its standard error. Where pixels are independent

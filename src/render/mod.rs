@@ -39,19 +39,29 @@ pub trait Backend {
     }
 }
 
-/// When to stop: after `spp` samples per pixel, after `seconds`, whichever comes first (at least
-/// one of them is set).
-#[derive(Clone, Copy, Debug)]
+/// When to stop: after `spp` samples per pixel, after `seconds`, or once the image's estimated
+/// relMSE is at most `relmse`, whichever comes first (at least one of them is set).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Budget {
     pub spp: Option<u32>,
     pub seconds: Option<f64>,
+    /// The error target (`--target-error`): [`Film::estimated_relmse`], looked at from
+    /// [`MIN_SAMPLES_FOR_TARGET`] samples per pixel on.
+    pub relmse: Option<f64>,
 }
+
+/// Samples per pixel before an error target is looked at: a pixel's variance from fewer
+/// samples is too often far below its true value (a few paths that find a small light, and none
+/// yet that do), and the render would stop too early.
+pub const MIN_SAMPLES_FOR_TARGET: u64 = 16;
 
 /// Why a render ended.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum StopReason {
     SampleCount,
     TimeBudget,
+    /// The estimated relMSE reached the error target.
+    ErrorTarget,
     Interrupted,
     /// The backend failed (e.g. the GPU device was lost); the film holds every pass before.
     Failed(String),
@@ -79,7 +89,7 @@ pub fn render_progressive(
     stop: &AtomicBool,
     mut on_pass: impl FnMut(&Film, u32, f64),
 ) -> RenderReport {
-    assert!(budget.spp.is_some() || budget.seconds.is_some());
+    assert!(budget.spp.is_some() || budget.seconds.is_some() || budget.relmse.is_some());
     let start = Instant::now();
     let mut done = film.spp() as u32;
     let target = budget.spp.map(|s| done + s);
@@ -95,6 +105,21 @@ pub fn render_progressive(
         if budget.seconds.is_some_and(|s| elapsed >= s) {
             break StopReason::TimeBudget;
         }
+        // The error target: relMSE falls as 1 / n, so the samples it needs are about
+        // n · estimate / target; the pass takes no more than those.
+        let mut needed = None;
+        if let Some(target) = budget.relmse {
+            if film.spp() < MIN_SAMPLES_FOR_TARGET {
+                needed = Some((MIN_SAMPLES_FOR_TARGET - film.spp()) as u32);
+            } else {
+                let estimate = film.estimated_relmse().unwrap_or(f64::INFINITY);
+                if estimate <= target {
+                    break StopReason::ErrorTarget;
+                }
+                let more = (done as f64 * (estimate / target - 1.0)).ceil();
+                needed = Some(more.clamp(1.0, u32::MAX as f64) as u32);
+            }
+        }
         // Size the pass from the measured cost of a sample per pixel: one sample first, then
         // as many as fit in the target duration and in what remains of the budget.
         let mut count = match per_spp {
@@ -109,6 +134,9 @@ pub fn render_progressive(
         };
         if let Some(t) = target {
             count = count.min(t - done);
+        }
+        if let Some(n) = needed {
+            count = count.min(n);
         }
         let t0 = Instant::now();
         let before = film.spp();

@@ -206,22 +206,9 @@ impl<'a> Render<'a> {
     /// (`Backend::pass_until`), then the rest asked with no stop: what a stop under way leaves,
     /// and what the render goes on from. Returns the film and the samples the stopped pass kept.
     pub fn stopped_under_way(&self, backend: Backend, after: std::time::Duration) -> (Film, u32) {
-        use hexray::render::{CpuBackend, GpuBackend};
         use std::sync::atomic::{AtomicBool, Ordering};
-        let (scene, flat) = self.loaded();
-        let camera = self.camera(&scene);
-        let mut target: Box<dyn hexray::render::Backend> = match backend {
-            Backend::Cpu => {
-                let mut b = CpuBackend::new(&flat, camera, self.seed, 2).unwrap();
-                b.method = self.method;
-                b.radius = self.radius;
-                Box::new(b)
-            }
-            Backend::Gpu => Box::new(GpuBackend {
-                renderer: self.gpu_renderer(),
-                adapter: String::new(),
-            }),
-        };
+        let (_, flat) = self.loaded();
+        let mut target = self.backend(backend, &flat);
         let mut film = Film::new(self.width, self.height);
         let stop = AtomicBool::new(false);
         std::thread::scope(|s| {
@@ -234,6 +221,47 @@ impl<'a> Render<'a> {
         let kept = film.spp() as u32;
         target.pass(kept, self.spp - kept, &mut film).unwrap();
         (film, kept)
+    }
+
+    /// The film of a progressive render (`render::render_progressive`) on `backend` that stops
+    /// at the error target `relmse` (`--target-error`), or at `spp` samples, whichever first.
+    pub fn until_error_target(&self, backend: Backend, relmse: f64) -> Film {
+        use hexray::render::{render_progressive, Budget, StopReason};
+        let (_, flat) = self.loaded();
+        let mut target = self.backend(backend, &flat);
+        let mut film = Film::new(self.width, self.height);
+        let budget = Budget {
+            spp: Some(self.spp),
+            relmse: Some(relmse),
+            ..Budget::default()
+        };
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let report = render_progressive(target.as_mut(), &mut film, budget, &never, |_, _, _| {});
+        assert_eq!(report.reason, StopReason::ErrorTarget, "{backend:?}");
+        film
+    }
+
+    /// This render's scene and method as a `render::Backend` on `backend` (CPU: two threads).
+    fn backend<'f>(
+        &self,
+        backend: Backend,
+        flat: &'f FlatScene,
+    ) -> Box<dyn hexray::render::Backend + 'f> {
+        use hexray::render::{CpuBackend, GpuBackend};
+        let camera = self.camera(&self.loaded().0);
+        match backend {
+            Backend::Cpu => {
+                let mut b = CpuBackend::new(flat, camera, self.seed, 2).unwrap();
+                b.method = self.method;
+                b.radius = self.radius;
+                b.faults = self.faults;
+                Box::new(b)
+            }
+            Backend::Gpu => Box::new(GpuBackend {
+                renderer: self.gpu_renderer(),
+                adapter: String::new(),
+            }),
+        }
     }
 
     /// A GPU renderer of the scene (with the merge radius schedule, if one is set), for tests
