@@ -92,11 +92,11 @@ run() {
             overlay=(--overlay "$dir/mitsuba.csv")
         fi
         echo "== $name: hexray $backends, path, light, bdpt, $seconds s each"
-        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt,sppm,vcm,vcm-full \
+        "$hexray" curve "$scene" --backend "$backends" --method path,light,bdpt,sppm,vcm,vcm-full,whitted \
             --time "$seconds" --reference "$ref" "${overlay[@]}" --out "$dir"
         "$hexray" compare "$ref" "$ref" --json > "$dir/reference.json"
         echo "== $name: pictures, 10 s each"
-        for method in path light bdpt sppm vcm vcm-full; do
+        for method in path light bdpt sppm vcm vcm-full whitted; do
             "$hexray" render "$scene" --backend cpu --method "$method" --time 10 \
                 --width "$size" --height "$size" --seed 5 --out "out/methods/${name}_$method.exr" \
                 --quiet
@@ -104,7 +104,7 @@ run() {
         done
     done
     echo "== cost: hexray bench, 256x256, 32 samples or iterations"
-    "$hexray" bench --backend "${backends}" --method path,light,bdpt,sppm,vcm,vcm-full --spp 32 \
+    "$hexray" bench --backend "${backends}" --method path,light,bdpt,sppm,vcm,vcm-full,whitted --spp 32 \
         --out "$out/bench.json" > "$out/bench.txt"
     markdown
 }
@@ -152,7 +152,7 @@ def fmt(x):
 def read(path):
     return open(path).read().strip() if os.path.exists(path) else None
 
-methods = ["path", "light", "bdpt", "sppm", "vcm", "vcm-full"]
+methods = ["path", "light", "bdpt", "sppm", "vcm", "vcm-full", "whitted"]
 refscenes = ("tncg15_room", "glass_room", "cornell_box")
 
 # relMSE at the budget minus the reference's noise, per scene and series.
@@ -274,7 +274,7 @@ if os.path.exists(f"{out}/bench.json"):
     spp = rows[0]["spp"] if rows else 0
     print("## Cost\n")
     print(f"M camera paths per second, 256x256, {spp} samples (`hexray bench --method")
-    print(f"path,light,bdpt,sppm,vcm,vcm-full --spp {spp}`; for every method but path a camera path")
+    print(f"path,light,bdpt,sppm,vcm,vcm-full,whitted --spp {spp}`; for every method but path and whitted a camera path")
     print("is one pixel's iteration, its light subpath included):\n")
     keys = []
     for r in rows:

@@ -737,7 +737,8 @@ fn render_with_checkpoints(
     let mut progress = Progress::new(args.quiet, budget, before, pixels);
     let mut last_checkpoint = 0.0;
     let report = render_progressive(backend, film, budget, stop.flag(), |film, spp, secs| {
-        progress.update(spp, secs);
+        let estimate = budget.relmse.and_then(|_| film.estimated_relmse());
+        progress.update(spp, secs, estimate);
         if args
             .checkpoint
             .is_some_and(|every| secs - last_checkpoint >= every)
@@ -904,15 +905,23 @@ impl Progress {
         }
     }
 
-    fn line(&self, spp: u32, secs: f64) -> (String, f64) {
+    /// The progress line and the share done, from the samples and seconds so far and, with an
+    /// error target, the estimated relMSE (which falls as 1 / samples).
+    fn line(&self, spp: u32, secs: f64, estimate: Option<f64>) -> (String, f64) {
         let new = spp as f64 - self.before as f64;
         let rate = new * self.pixels as f64 / secs / 1e6;
         let mut fraction = 0.0f64;
         let mut left = f64::INFINITY;
+        let mut error = String::new();
+        if let (Some(target), Some(e)) = (self.budget.relmse, estimate) {
+            fraction = (target / e).min(1.0);
+            left = secs * (e / target - 1.0).max(0.0);
+            error = format!(", relMSE {e:.2e} of {target:.0e}");
+        }
         if let Some(n) = self.budget.spp {
             let target = self.before as f64 + n as f64;
-            fraction = new / n as f64;
-            left = (target - spp as f64) * secs / new.max(1.0);
+            fraction = fraction.max(new / n as f64);
+            left = left.min((target - spp as f64) * secs / new.max(1.0));
         }
         if let Some(t) = self.budget.seconds {
             fraction = fraction.max(secs / t);
@@ -924,7 +933,7 @@ impl Progress {
             .map_or(String::new(), |n| format!("/{}", self.before + n as u64));
         (
             format!(
-                "{spp}{target} spp, {rate:.3} M camera paths/s, {} elapsed, {} left",
+                "{spp}{target} spp{error}, {rate:.3} M camera paths/s, {} elapsed, {} left",
                 clock(secs),
                 clock(left)
             ),
@@ -932,14 +941,14 @@ impl Progress {
         )
     }
 
-    fn update(&mut self, spp: u32, secs: f64) {
+    fn update(&mut self, spp: u32, secs: f64, estimate: Option<f64>) {
         if let Some(bar) = &self.bar {
-            let (msg, fraction) = self.line(spp, secs);
+            let (msg, fraction) = self.line(spp, secs, estimate);
             bar.set_position((fraction * 1000.0) as u64);
             bar.set_message(msg);
         } else if self.log && secs - self.last_log >= Self::LOG_EVERY {
             self.last_log = secs;
-            eprintln!("hexray: {}", self.line(spp, secs).0);
+            eprintln!("hexray: {}", self.line(spp, secs, estimate).0);
         }
     }
 
