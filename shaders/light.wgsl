@@ -84,3 +84,29 @@ fn sample_emission(u_point: vec4<f32>, u_dir: vec4<f32>) -> EmissionSample {
     let basis = orthonormal_basis(point.n);
     return EmissionSample(point, local.x * basis.t + local.y * basis.b + local.z * point.n, local.z, local.z * FRAC_1_PI);
 }
+
+// Next-event estimation's link from a surface point to a point on the emitters
+// (`EmitterLink` in src/transport/light.rs); `found` false where either side faces away.
+struct EmitterLink {
+    found: bool,
+    shadow: Ray,
+    le: vec3<f32>,
+    cos_s: f32,
+    light_pdf: f32,
+}
+
+// Links the point p (error bound p_err, geometric normal n, n_facing on the shaded side) to the
+// emitter point ls: the shadow ray between the two points offset off their surfaces, t in (0, 1).
+fn link_to_emitter(p: vec3<f32>, p_err: vec3<f32>, n: vec3<f32>, n_facing: vec3<f32>, ls: LightSample) -> EmitterLink {
+    let to_light = ls.p - p;
+    let dist2 = dot(to_light, to_light);
+    let wi = to_light / sqrt(dist2);
+    let cos_s = dot(n_facing, wi);
+    let cos_l = -dot(ls.n, wi);
+    if !(cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0) {
+        return EmitterLink(false, Ray(p, wi), vec3<f32>(0.0), 0.0, 0.0);
+    }
+    let origin = offset_ray_origin(p, p_err, n, wi);
+    let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+    return EmitterLink(true, Ray(origin, light_point - origin), ls.le, cos_s, area_to_solid_angle(ls.pdf_area, dist2, cos_l));
+}

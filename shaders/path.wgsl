@@ -92,21 +92,11 @@ fn path_bounce(path: ptr<function, PathState>, sampler: Sampler) -> bool {
                 u = draw4(sampler, dim_light_extra(bounce, j));
             }
             let ls = sample_emitter(u.x, u.y, u.z);
-            let to_light = ls.p - hit.p;
-            let dist2 = dot(to_light, to_light);
-            let wi = to_light / sqrt(dist2);
-            let cos_s = dot(n_facing, wi);
-            let cos_l = -dot(ls.n, wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray(origin, light_point - origin);
-                if !occluded(shadow, 1.0) {
-                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                    let f = albedo * FRAC_1_PI;
-                    let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
-                    (*path).radiance += (*path).throughput * f * ls.le * (cos_s * w / (n_light * light_pdf));
-                }
+            let link = link_to_emitter(hit.p, hit.p_err, hit.n, n_facing, ls);
+            if link.found && !occluded(link.shadow, 1.0) {
+                let f = albedo * FRAC_1_PI;
+                let w = power_heuristic(n_light * link.light_pdf, link.cos_s * FRAC_1_PI);
+                (*path).radiance += (*path).throughput * f * link.le * (link.cos_s * w / (n_light * link.light_pdf));
             }
         }
     }

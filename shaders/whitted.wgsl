@@ -55,20 +55,10 @@ fn trace_whitted(x: u32, y: u32, sampler: Sampler) -> vec3<f32> {
             let u = draw4(sampler, dim_light(index));
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
             let ls = sample_emitter(u.x, u.y, u.z);
-            let to_light = ls.p - hit.p;
-            let dist2 = dot(to_light, to_light);
-            let wi = to_light / sqrt(dist2);
-            let cos_s = dot(n_facing, wi);
-            let cos_l = -dot(ls.n, wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray(origin, light_point - origin);
-                if !occluded(shadow, 1.0) {
-                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
-                    let f = material.color * FRAC_1_PI;
-                    radiance += b.weight * f * ls.le * (cos_s / light_pdf);
-                }
+            let link = link_to_emitter(hit.p, hit.p_err, hit.n, n_facing, ls);
+            if link.found && !occluded(link.shadow, 1.0) {
+                let f = material.color * FRAC_1_PI;
+                radiance += b.weight * f * link.le * (link.cos_s / link.light_pdf);
             }
             continue;
         }

@@ -25,7 +25,9 @@ use crate::math::sampling::{
 use crate::transport::bsdf::{sample_bsdf, BsdfSample, Transport};
 use crate::transport::camera::Camera;
 use crate::transport::faults::Faults;
-use crate::transport::light::{area_to_solid_angle, emitter_pdf_area, sample_emitter};
+use crate::transport::light::{
+    area_to_solid_angle, emitter_pdf_area, link_to_emitter, sample_emitter,
+};
 use arrayvec::ArrayVec;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -199,24 +201,13 @@ pub fn shade_hit(
                 sampler.draw4(dim_light_extra(bounce, j))
             };
             let ls = sample_emitter(scene, u[0], u[1], u[2]);
-            let to_light = ls.p - hit.p;
-            let dist2 = to_light.length_squared();
-            let wi = to_light / dist2.sqrt();
-            let cos_s = n_facing.dot(wi);
-            let cos_l = -ls.n.dot(wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray {
-                    o: origin,
-                    d: light_point - origin,
-                };
-                let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+            if let Some(link) = link_to_emitter(hit.p, hit.p_err, hit.n, n_facing, &ls) {
+                let (cos_s, light_pdf) = (link.cos_s, link.light_pdf);
                 let f = albedo * FRAC_1_PI;
                 let w = power_heuristic(n_light * light_pdf, cos_s * FRAC_1_PI);
                 events.extend([NextEvent {
-                    ray: shadow,
-                    value: path.throughput * f * ls.le * (cos_s * w / (n_light * light_pdf)),
+                    ray: link.shadow,
+                    value: path.throughput * f * link.le * (cos_s * w / (n_light * light_pdf)),
                 }]);
             }
         }

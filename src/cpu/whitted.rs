@@ -27,7 +27,7 @@ use crate::math::sampling::{dim_light, Sampler, DIM_CAMERA};
 use crate::transport::bsdf::{fresnel_dielectric, is_diffuse, reflect, refract};
 use crate::transport::camera::Camera;
 use crate::transport::faults::Faults;
-use crate::transport::light::{area_to_solid_angle, sample_emitter};
+use crate::transport::light::{link_to_emitter, sample_emitter};
 use arrayvec::ArrayVec;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -93,23 +93,11 @@ pub fn trace_whitted(
             let u = sampler.draw4(dim_light(index));
             let n_facing = if cos_o < 0.0 { -hit.n } else { hit.n };
             let ls = sample_emitter(scene, u[0], u[1], u[2]);
-            let to_light = ls.p - hit.p;
-            let dist2 = to_light.length_squared();
-            let wi = to_light / dist2.sqrt();
-            let cos_s = n_facing.dot(wi);
-            let cos_l = -ls.n.dot(wi);
-            if cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0 {
-                let origin = offset_ray_origin(hit.p, hit.p_err, hit.n, wi);
-                let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
-                let shadow = Ray {
-                    o: origin,
-                    d: light_point - origin,
-                };
+            if let Some(link) = link_to_emitter(hit.p, hit.p_err, hit.n, n_facing, &ls) {
                 *rays += 1;
-                if !occluded(scene, &shadow, 1.0) {
-                    let light_pdf = area_to_solid_angle(ls.pdf_area, dist2, cos_l);
+                if !occluded(scene, &link.shadow, 1.0) {
                     let f = Vec3::from(material.color) * FRAC_1_PI;
-                    radiance += b.weight * f * ls.le * (cos_s / light_pdf);
+                    radiance += b.weight * f * link.le * (link.cos_s / link.light_pdf);
                 }
             }
             continue;

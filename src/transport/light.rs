@@ -2,7 +2,9 @@
 //! the pdf of that choice with respect to solid angle at the receiving point.
 
 use crate::layout::{FlatScene, NOT_AN_EMITTER, PRIM_SPHERE_BIT};
-use crate::math::geometry::{sphere_point_at, triangle_normal, triangle_point};
+use crate::math::geometry::{
+    offset_ray_origin, sphere_point_at, triangle_normal, triangle_point, Ray,
+};
 use crate::math::lanes::{self, F8, LANES, V8};
 use crate::math::sampling::{
     orthonormal_basis, sample_cosine_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
@@ -325,4 +327,46 @@ mod tests {
         }
         assert!(chosen[0] > 100 && chosen[1] > 100, "{chosen:?}");
     }
+}
+
+/// Next-event estimation's link from a surface point to a point on the emitters: the shadow ray
+/// to trace, what the point emits, the cosine at the surface and the point's pdf in solid angle.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterLink {
+    pub shadow: Ray,
+    pub le: Vec3,
+    pub cos_s: f32,
+    pub light_pdf: f32,
+}
+
+/// Links the point `p` (error bound `p_err`, geometric normal `n`, `n_facing` on the side that
+/// is shaded) to the emitter point `ls`: None where either side faces away. The shadow ray runs
+/// between the two points offset off their surfaces, with t in (0, 1).
+#[inline]
+pub fn link_to_emitter(
+    p: Vec3,
+    p_err: Vec3,
+    n: Vec3,
+    n_facing: Vec3,
+    ls: &LightSample,
+) -> Option<EmitterLink> {
+    let to_light = ls.p - p;
+    let dist2 = to_light.length_squared();
+    let wi = to_light / dist2.sqrt();
+    let cos_s = n_facing.dot(wi);
+    let cos_l = -ls.n.dot(wi);
+    if !(cos_s > 0.0 && cos_l > 0.0 && dist2 > 0.0) {
+        return None;
+    }
+    let origin = offset_ray_origin(p, p_err, n, wi);
+    let light_point = offset_ray_origin(ls.p, ls.p_err, ls.n, -wi);
+    Some(EmitterLink {
+        shadow: Ray {
+            o: origin,
+            d: light_point - origin,
+        },
+        le: ls.le,
+        cos_s,
+        light_pdf: area_to_solid_angle(ls.pdf_area, dist2, cos_l),
+    })
 }
