@@ -69,10 +69,13 @@ fn store_light_vertex(path: u32, last: u32, v: LightVertex) -> u32 {
 fn trace_light_path(sampler: Sampler, path: u32) {
     let n_paths = f32(frame.n_light_paths);
     // MIS-weighted splats (not light tracing's weight 1), stored vertices (not light tracing),
-    // splats at all (not SPPM).
+    // splats at all (not SPPM or photon-map).
     let bidirectional = frame.method != METHOD_LIGHT;
     let stores = frame.method != METHOD_LIGHT;
-    let splats_to_camera = frame.method != METHOD_SPPM;
+    let splats_to_camera = frame.method != METHOD_SPPM && frame.method != METHOD_PHOTON_MAP;
+    // The light's first hits are direct light, which photon-map takes by next-event estimation
+    // alone.
+    let stores_first_hits = frame.method != METHOD_PHOTON_MAP;
     // Where roulette starts: earlier where camera vertices connect to this subpath's.
     let rr_start = select(
         RR_START_BOUNCE,
@@ -160,8 +163,8 @@ fn trace_light_path(sampler: Sampler, path: u32) {
             let n_facing = select(hit.n, -hit.n, cos_o < 0.0);
 
             // Step 4 - store the vertex for the camera subpaths to connect to and merge with
-            // (BDPT, VCM, SPPM).
-            if stores && !full {
+            // (BDPT, VCM, SPPM, photon-map but for first hits).
+            if stores && !full && (length > 1u || stores_first_hits) {
                 let v = LightVertex(hit.p, max_element(hit.p_err), n_facing, hit.material, wo, length, throughput, NO_VERTEX, m.d_vcm, m.d_vc, m.d_vm, path);
                 last = store_light_vertex(path, last, v);
                 full = last == NO_VERTEX;

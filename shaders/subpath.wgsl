@@ -72,9 +72,9 @@ fn merge_within(merge: MergeMis, share: f32) -> MergeMis {
     return MergeMis(merge.vm * s, merge.vc / s, merge.camera_goes_on);
 }
 
-// Whether this iteration merges photons (SPPM, VCM, at a radius above 0).
+// Whether this iteration merges photons (SPPM, VCM, photon-map, at a radius above 0).
 fn merges() -> bool {
-    return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL) && frame.merge_normalization > 0.0;
+    return (frame.method == METHOD_SPPM || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL || frame.method == METHOD_PHOTON_MAP) && frame.merge_normalization > 0.0;
 }
 
 // Georgiev's recursive quantities of one subpath vertex (`SubpathMis`).

@@ -35,6 +35,7 @@ mod meshes;
 mod mis_weights;
 mod module_graph;
 mod nothing_lost;
+mod photon_map;
 mod photon_merging;
 mod precision;
 mod reintersect;

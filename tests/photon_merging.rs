@@ -166,7 +166,7 @@ fn vcm_without_merging_is_bdpt_bit_for_bit() {
 
 /// relMSE of a film against a reference of the same size, with the reference's own noise
 /// (mean var_r / (r² + 0.01)) subtracted: E (x − r)² = var_x + var_r.
-fn relmse(film: &Film, reference: &MeanImage) -> f64 {
+pub(crate) fn relmse(film: &Film, reference: &MeanImage) -> f64 {
     let candidate = MeanImage::from_film(film);
     let mut sum = 0.0;
     for (i, (x, r)) in candidate.mean.iter().zip(&reference.mean).enumerate() {
@@ -178,8 +178,8 @@ fn relmse(film: &Film, reference: &MeanImage) -> f64 {
     sum / (3 * candidate.mean.len()) as f64
 }
 
-const CAUSTIC: &str = "scenes/stability/caustic.json";
-const CAUSTIC_REFERENCE: &str = "tests/data/references/stability/caustic_32.exr";
+pub(crate) const CAUSTIC: &str = "scenes/stability/caustic.json";
+pub(crate) const CAUSTIC_REFERENCE: &str = "tests/data/references/stability/caustic_32.exr";
 const GLASS: &str = "scenes/glass_room.json";
 const GLASS_REFERENCE: &str = "tests/data/references/stability/glass_room_32.exr";
 
@@ -360,11 +360,11 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// move the image's mean. On both GPUs a second render of the same streams equals the first bit
 /// for bit (`gpu_merging_renders_the_same_streams_bit_for_bit`), so the flips are the
 /// arithmetic's, not a race's.
-const FLIPPED_PIXELS_ALLOWED: usize = 64 * 64 / 100;
+pub(crate) const FLIPPED_PIXELS_ALLOWED: usize = 64 * 64 / 100;
 
 /// The merge radius of the same-streams checks as a share of the scene's bounding-sphere radius,
 /// the same at every vertex: 0.01, where [`FLIPPED_PIXELS_ALLOWED`] was measured.
-const SAME_STREAMS_RADIUS: f32 = 0.01;
+pub(crate) const SAME_STREAMS_RADIUS: f32 = 0.01;
 
 /// A pixel agrees when its relMSE term is at most this (a relative difference of 1e-4).
 const ROUNDING_TERM: f64 = 1e-8;
@@ -381,7 +381,7 @@ fn same_streams(rel: &str, method: Method, gpu_faults: Faults) -> Option<usize> 
 }
 
 /// [`same_streams`] at merge radius `radius` (0: vcm is BDPT).
-fn same_streams_at(
+pub(crate) fn same_streams_at(
     rel: &str,
     method: Method,
     radius: MergeRadius,
@@ -615,7 +615,7 @@ const FURNACE_RADIUS: MergeRadius = MergeRadius {
 };
 
 /// The merging furnace on `backend`: 256 iterations at 32x32, seed 21 on the CPU, 22 on the GPU.
-fn merging_furnace(backend: Backend, method: Method, faults: Faults) -> Film {
+pub(crate) fn merging_furnace(backend: Backend, method: Method, faults: Faults) -> Film {
     let seed = match backend {
         Backend::Cpu => 21,
         Backend::Gpu => 22,
@@ -630,7 +630,7 @@ fn merging_furnace(backend: Backend, method: Method, faults: Faults) -> Film {
         .on(backend)
 }
 
-const BALL: Faults = Faults {
+pub(crate) const BALL: Faults = Faults {
     merge_kernel_ball: true,
     ..Faults::NONE
 };

@@ -186,7 +186,7 @@ pub fn make_backend<'a>(
                 shadow_threshold_for(method, flat, &camera),
             )?;
             renderer.set_light_samples(light_samples);
-            if method.merges() {
+            if method.progressive() {
                 let base =
                     crate::transport::merging::MergeRadius::default_for(flat, &camera, method);
                 renderer.set_merge_radius(crate::gpu::context::default_merge_radius(&g.info, base));

@@ -53,6 +53,14 @@ pub fn consistency_note(what: &str, path: &Path) -> Option<String> {
              and its variance (and so the z and 5 s.e. figures) covers its noise only"
         ));
     }
+    if method == crate::transport::method::Method::PhotonMap {
+        return Some(format!(
+            "the {what} was rendered with photon-map, which is biased: its variance (and so the \
+             z and 5 s.e. figures) covers its noise, not the bias of its density estimates within \
+             radius {}, which more samples do not shrink",
+            meta.get("merge_radius").unwrap_or("?"),
+        ));
+    }
     method.merges().then(|| {
         format!(
             "the {what} was rendered with {method}, which is consistent, not unbiased: its \

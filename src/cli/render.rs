@@ -43,14 +43,17 @@ pub(crate) struct RenderArgs {
     /// subpath and a camera subpath per pixel) per sample. `sppm`, `vcm` and `vcm-full` merge
     /// photons: consistent, not unbiased (the bias shrinks with the radius over iterations; the
     /// standard error does not cover it). `whitted` is biased: direct light and perfect mirrors
-    /// and glass only, without indirect diffuse light or caustics. Default: vcm for `render` (the lowest error at equal
-    /// time on the reference scenes, docs/methods.md), path for `reference` (unbiased).
+    /// and glass only, without indirect diffuse light or caustics. `photon-map` is biased: its
+    /// density estimates within a fixed radius blur the light, whatever the samples. Default:
+    /// vcm for `render` (the lowest error at equal time on the reference scenes,
+    /// docs/methods.md), path for `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
     /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units, the same at every
-    /// camera vertex. Default: a disk that spans a fixed share of the view's height at the
-    /// distance that half of the view lies within (vcm 0.0155 of it, sppm and vcm-full 0.006;
-    /// 0.3 x on a hardware GPU, whose renders run many more iterations); sppm's nearer vertices
+    /// camera vertex; photon-map's radius, the same at every vertex and iteration. Default: a
+    /// disk that spans a fixed share of the view's height at the distance that half of the view
+    /// lies within (vcm 0.0155 of it, sppm and vcm-full 0.006, photon-map 0.006; for the
+    /// progressive methods 0.3 x on a hardware GPU, whose renders run many more iterations); sppm's nearer vertices
     /// merge within that share of the view's height at their own distance.
     /// Iteration i merges within r_1 i^((alpha-1)/2); vcm merges within less where another
     /// surface is nearer to the camera vertex (its clearance, at least 0.1 of that). vcm and
@@ -64,8 +67,9 @@ pub(crate) struct RenderArgs {
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
-    /// Light subpaths per iteration N of every method but path, at most one per pixel (more are
-    /// cut to that). Default: one per pixel, up to 262144 (512x512) for sppm, vcm and vcm-full
+    /// Light subpaths per iteration N of every method but path and whitted, at most one per pixel
+    /// (more are cut to that): photon-map's photon paths. Default: one per pixel, up to 262144
+    /// (512x512) for sppm, vcm, vcm-full and photon-map
     /// and 1048576 for light and bdpt; beyond, the camera subpaths share them (pixel index mod
     /// N), so an iteration's cost grows as its pixels.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
@@ -85,7 +89,7 @@ pub(crate) struct RenderArgs {
     /// Error target: stop once the image's estimated relMSE (mean over pixels of the variance
     /// of the mean over (mean² + 0.01), what `hexray compare` measures against a reference) is
     /// at most E, looked at from 16 samples per pixel on. With --spp or --time, whichever comes
-    /// first. A method's bias (merging, whitted) is not in the estimate.
+    /// first. A method's bias (merging, whitted, photon-map) is not in the estimate.
     #[arg(long, value_name = "E", value_parser = parse_target_error)]
     pub(crate) target_error: Option<f64>,
     /// Seed of the random streams; renders with different seeds are independent.
@@ -168,7 +172,14 @@ pub(crate) fn merge_radius_of(
 ) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
     if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
-            "--radius and --alpha are for --method sppm, vcm and vcm-full, not {method}"
+            "--radius and --alpha are for --method sppm, vcm, vcm-full and photon-map (--radius \
+             only), not {method}"
+        ));
+    }
+    if !method.progressive() && alpha.is_some() {
+        return Err(format!(
+            "--alpha is for the progressive methods (sppm, vcm, vcm-full); {method}'s radius is \
+             fixed"
         ));
     }
     if !method.splats() && light_paths.is_some() {
@@ -187,8 +198,8 @@ pub(crate) fn merge_radius_of(
         r.alpha = a;
     }
     r.light_paths = light_paths;
-    if method == Method::Sppm && r.initial <= 0.0 {
-        return Err("--method sppm needs a merge radius above 0".into());
+    if matches!(method, Method::Sppm | Method::PhotonMap) && r.initial <= 0.0 {
+        return Err(format!("--method {method} needs a merge radius above 0"));
     }
     Ok(r)
 }
@@ -236,7 +247,10 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
     args.light_samples = id.light_samples;
     args.radius = id.merge_radius;
     args.reach = id.merge_reach;
-    args.alpha = id.merge_alpha;
+    // A fixed radius (photon-map) has no schedule to resume.
+    args.alpha = id
+        .merge_alpha
+        .filter(|_| args.method.is_some_and(Method::progressive));
     args.light_paths = id.light_paths;
     args.scene.get_or_insert_with(|| PathBuf::from(&id.scene));
     args.out.get_or_insert_with(|| exr.to_path_buf());
@@ -308,9 +322,10 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
     let gpu = choose_gpu(args)?;
     // Without --radius, a hardware GPU merges within a share of the default
-    // (`merging::HARDWARE_GPU_RADIUS_SCALE`): its renders run many more iterations.
+    // (`merging::HARDWARE_GPU_RADIUS_SCALE`): its renders run many more iterations. photon-map's
+    // radius, whose bias no number of iterations removes, is the same on every backend.
     let radius = match &gpu {
-        Some(g) if args.radius.is_none() && method.merges() => {
+        Some(g) if args.radius.is_none() && method.progressive() => {
             gpu::context::default_merge_radius(&g.info, radius)
         }
         _ => radius,
@@ -820,7 +835,14 @@ fn summarise(
         "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
         mean[0], mean[1], mean[2], se[0], se[1], se[2]
     );
-    if method.merges() {
+    if method == Method::PhotonMap {
+        eprintln!(
+            "photon-map is biased: its density estimates within r = {:e} blur the light, a bias \
+             that does not shrink with samples (the radius is fixed) and that the standard error \
+             does not cover",
+            radius.initial
+        );
+    } else if method.merges() {
         eprintln!(
             "{} is consistent, not unbiased: merging within {}r = {:e} shrinking to {:e} \
              (alpha {}) leaves a bias that the standard error does not cover",

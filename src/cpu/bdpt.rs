@@ -108,8 +108,10 @@ pub struct PhotonRecord {
     /// α (`LightVertex::throughput`).
     pub throughput: [f32; 3],
     /// The light side's part of the merge weight's denominator
-    /// (`subpath::merge_light_share`, with the photon's cos θ / π toward its previous vertex);
-    /// 0 without connections (SPPM, whose weights are 1).
+    /// (`subpath::merge_light_share`, with the photon's cos θ / π toward its previous vertex).
+    /// Without connections (SPPM, photon-map), whose weights are 1, the vertex's d_vm instead:
+    /// above 0 exactly where its subpath scattered diffusely before it, which puts the photon in
+    /// photon-map's global map (`photon_map.rs`; SPPM reads nothing of it).
     pub w_light: f32,
 }
 
@@ -129,7 +131,7 @@ impl PhotonRecord {
             let cos_light = Vec3::from(v.n).dot(Vec3::from(v.wo));
             merge_light_share(&light_mis, merge, cos_light * FRAC_1_PI)
         } else {
-            0.0
+            v.d_vm
         };
         PhotonRecord {
             n: v.n,

@@ -52,6 +52,10 @@ pub enum LightPassMode {
     Bidirectional,
     /// SPPM: diffuse vertices stored as photons, nothing splatted.
     PhotonMapping,
+    /// Jensen's photon mapping (`photon-map`, `photon_map.rs`): diffuse vertices stored as
+    /// photons but for the light's first hits (direct light, which next-event estimation takes),
+    /// nothing splatted.
+    CausticAndGlobal,
 }
 
 /// Everything one light pass shares.
@@ -173,7 +177,13 @@ impl LightPass<'_> {
         let scene = self.scene;
         let n_paths = self.n_light_paths as f32;
         let stores = self.mode != LightPassMode::LightTracing;
-        let splats_to_camera = self.mode != LightPassMode::PhotonMapping;
+        let splats_to_camera = matches!(
+            self.mode,
+            LightPassMode::LightTracing | LightPassMode::Bidirectional
+        );
+        // The light's first hits are direct light, which photon-map takes by next-event
+        // estimation alone.
+        let stores_first_hits = self.mode != LightPassMode::CausticAndGlobal;
         // Where roulette starts: earlier where camera vertices connect to this subpath's.
         let rr_start = if self.mode == LightPassMode::Bidirectional {
             LIGHT_SUBPATH_RR_START_BOUNCE
@@ -278,8 +288,8 @@ impl LightPass<'_> {
                 let albedo = Vec3::from(material.color);
 
                 // Step 4 - store the vertex for the camera subpaths to connect to and merge
-                // with (BDPT, VCM, SPPM).
-                if stores {
+                // with (BDPT, VCM, SPPM, photon-map but for first hits).
+                if stores && (length > 1 || stores_first_hits) {
                     vertices.push(LightVertex {
                         p: hit.p.into(),
                         p_err: hit.p_err.max_element(),

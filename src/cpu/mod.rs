@@ -6,6 +6,7 @@ pub mod dark_image;
 pub mod light_path;
 pub mod path;
 pub mod path_wavefront;
+pub mod photon_map;
 pub mod shadow_probe;
 pub mod whitted;
 
@@ -297,6 +298,7 @@ pub fn render_iterations_until(
     let mode = match method {
         Method::Light => LightPassMode::LightTracing,
         Method::Sppm => LightPassMode::PhotonMapping,
+        Method::PhotonMap => LightPassMode::CausticAndGlobal,
         _ => LightPassMode::Bidirectional,
     };
     let mut rays = 0u64;
@@ -475,6 +477,16 @@ impl Iteration<'_> {
                 }
             }),
         };
+        let photon_map = camera_pass
+            .photons
+            .filter(|_| method == Method::PhotonMap)
+            .map(|photons| photon_map::PhotonMapPass {
+                scene,
+                camera: self.camera,
+                faults,
+                photons,
+                radius,
+            });
         let tiles_x = w.div_ceil(TILE);
         (0..tiles_x * h.div_ceil(TILE))
             .into_par_iter()
@@ -491,7 +503,16 @@ impl Iteration<'_> {
                 for y in ty * TILE..((ty + 1) * TILE).min(h) {
                     for x in tx * TILE..((tx + 1) * TILE).min(w) {
                         let index = (y * w + x) as usize;
-                        let n_c = if method != Method::Light {
+                        let n_c = if let Some(pass) = &photon_map {
+                            // Photon mapping: the pixel's n_c camera samples, each gathering
+                            // from the iteration's photon maps (no light subpath of its own).
+                            let n_c = buffers.camera_subpaths[index];
+                            for k in 0..n_c {
+                                let sampler = Sampler::new(seed, index as u32 + k * w * h, s);
+                                radiance.push(pass.trace_camera_path(x, y, &sampler, &mut rays));
+                            }
+                            n_c
+                        } else if method != Method::Light {
                             // The pixel's n_c camera subpaths, averaged, each connecting to
                             // light subpath index mod N; the k-th draws the streams of pixel
                             // index + k · w · h (a camera subpath's own blocks there: light

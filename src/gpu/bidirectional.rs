@@ -261,7 +261,14 @@ impl Bidirectional {
         });
         Ok(Bidirectional {
             light_pipeline: pipeline("light_pass"),
-            camera_pipeline: (method != Method::Light).then(|| pipeline("camera_pass")),
+            // Photon mapping's camera pass gathers from the photon maps; the others' is BDPT's.
+            camera_pipeline: (method != Method::Light).then(|| {
+                pipeline(if method == Method::PhotonMap {
+                    "photon_map_pass"
+                } else {
+                    "camera_pass"
+                })
+            }),
             resolve_pipeline: pipeline("resolve_pass"),
             merging,
             layout,

@@ -21,7 +21,7 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 17] = [
+pub const BODY: [(&str, &str); 18] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
@@ -51,6 +51,10 @@ pub const BODY: [(&str, &str); 17] = [
         include_str!("../../shaders/hash_grid.wgsl"),
     ),
     ("bdpt.wgsl", include_str!("../../shaders/bdpt.wgsl")),
+    (
+        "photon_map.wgsl",
+        include_str!("../../shaders/photon_map.wgsl"),
+    ),
 ];
 
 /// Every shader file (for tests that check none is left out).

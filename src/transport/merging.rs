@@ -63,6 +63,12 @@ pub const VCM_VIEW_SHARE: f32 = 0.031;
 /// 1.001 and 1.093 of the scene-bound radius's on the three reference scenes: not tuned yet.
 pub const DEFAULT_VIEW_SHARE: f32 = 0.012;
 
+/// k for `photon-map`, whose radius is the same at every vertex and every iteration: 0.012, as
+/// sppm's. On the reference scenes at 256x256 in 20 s on the CPU (seeds 21 and 22), half of it
+/// had 0.98, 0.83 and 1.23 of its relMSE on tncg15_room, glass_room and cornell_box, the same by
+/// the geometric mean; twice it 1.69, 1.27 and 1.13 (docs/records/2026-11-29_photon_map).
+pub const PHOTON_MAP_VIEW_SHARE: f32 = 0.012;
+
 /// The share of a radius that a hardware GPU takes by default: 0.3. Such a GPU runs tens to
 /// hundreds of times the iterations of the CPU backend in the same time, and in long renders
 /// the squared bias of a wide disk outlasts the variance it saves. On an NVIDIA H200 at 512x512
@@ -175,13 +181,20 @@ impl MergeRadius {
     pub fn default_for(scene: &FlatScene, camera: &Camera, method: Method) -> MergeRadius {
         let k = if method.merges_within_clearance() {
             VCM_VIEW_SHARE
+        } else if method == Method::PhotonMap {
+            PHOTON_MAP_VIEW_SHARE
         } else {
             DEFAULT_VIEW_SHARE
         };
         let reach = view_reach(scene, camera);
         MergeRadius {
             initial: k * Vec3::from(camera.up).length() * reach,
-            alpha: DEFAULT_ALPHA,
+            // photon-map's radius is fixed (α = 1): not progressive.
+            alpha: if method.progressive() {
+                DEFAULT_ALPHA
+            } else {
+                1.0
+            },
             reach: if method == Method::Sppm { reach } else { 0.0 },
             light_paths: None,
         }

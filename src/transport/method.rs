@@ -37,6 +37,13 @@ pub enum Method {
     /// Biased: it leaves out indirect diffuse light and caustics (light that reaches a diffuse
     /// surface by way of a mirror or glass).
     Whitted,
+    /// Photon mapping in Jensen's two-pass form (`src/cpu/photon_map.rs`): a caustic map
+    /// (photons that came by mirrors and glass alone) and a global map (photons after a diffuse
+    /// scattering), traced anew each iteration; at the first diffuse point the camera sees,
+    /// next-event estimation, the caustic map, and final gathering (one cosine-sampled ray to a
+    /// diffuse point, where the direct light and both maps are taken). Biased: the fixed radius
+    /// blurs the light (not progressive, so the bias does not shrink with samples).
+    PhotonMap,
 }
 
 impl Method {
@@ -73,6 +80,7 @@ impl Method {
             Method::Vcm => "vcm",
             Method::VcmFull => "vcm-full",
             Method::Whitted => "whitted",
+            Method::PhotonMap => "photon-map",
         }
     }
 
@@ -107,7 +115,16 @@ impl Method {
     /// Whether the method merges photons: consistent rather than unbiased, with a bias that
     /// the film's standard error does not cover and that vanishes as the radius shrinks.
     pub fn merges(self) -> bool {
-        matches!(self, Method::Sppm | Method::Vcm | Method::VcmFull)
+        matches!(
+            self,
+            Method::Sppm | Method::Vcm | Method::VcmFull | Method::PhotonMap
+        )
+    }
+
+    /// Whether the merge radius shrinks over iterations (α < 1), so that the bias vanishes
+    /// (SPPM, VCM): every merging method but photon-map, whose radius is fixed.
+    pub fn progressive(self) -> bool {
+        self.merges() && self != Method::PhotonMap
     }
 
     /// Whether the method merges within each camera vertex's clearance
