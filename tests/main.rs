@@ -53,4 +53,5 @@ mod stability_tiny_light;
 mod standard_error;
 mod target_error;
 mod tessellation;
+mod twins;
 mod whitted;
