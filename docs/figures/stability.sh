@@ -40,6 +40,7 @@ cornell_box scenes/cornell_box.json 262144 path
 door_ajar scenes/stability/door_ajar.json 524288 path
 mirror_caustic scenes/stability/mirror_caustic.json 131072 bdpt
 enclosed_light scenes/stability/enclosed_light.json 65536 bdpt
+tiny_light_1e2_bdpt scenes/stability/tiny_light_1e2.json 32768 bdpt
 EOF
 }
 
