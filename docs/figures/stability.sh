@@ -5,7 +5,7 @@
 # docs/figures/stability/tests.log.
 #
 #   docs/figures/stability.sh references   # the long CPU references (tests/data/references/stability/;
-#                                          # about 1.5 hours on 2 cores: the 10^4 tiny light dominates)
+#                                          # about 80 min on 2 cores: the 10^4 tiny light dominates)
 #   ONLY=door_ajar\|enclosed_light docs/figures/stability.sh references   # only those
 #   docs/figures/stability.sh report       # pictures, curves, test values -> docs/figures/stability/,
 #                                          # then docs/stability.md (~25 min)

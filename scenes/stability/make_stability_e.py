@@ -7,14 +7,14 @@ succeeds; docs/atlas.sh renders every method on them against a 32x32 reference
 door_ajar.json: Veach's door ajar. A closed enclosure 6 x 3 x 2.5 (x in [-3, 3], y in
   [-1.5, 1.5], z in [0, 2.5]), diffuse albedo 0.7, split at x = 0 by a zero-thickness diffuse
   wall with a doorway (y in [0.3, 1.1], z in [0, 2]). The door (a diffuse quad, 0.8 x 2) is
-  hinged at y = 0.3 and opened 10 degrees into the lit room (x > 0): the light passes a slit about
-  0.08 wide between its free edge and the jamb. A 1 x 1 emitter (Le = 250, facing down) on the
-  ceiling of the lit room is the only light. The camera is in the dark room (x < 0) near the
-  dividing wall, looking away from it: it sees no emitter and no part of the slit. Next-event
-  estimation from the dark room is occluded almost everywhere (only a streak of light through the
-  slit on the side wall is direct), so path tracing must find the slit by BSDF sampling; light
-  subpaths bounce around the lit room and find it as often, and every one that does connects to
-  the camera.
+  hinged at y = 0.3 and opened 10 degrees into the lit room (x > 0): the light passes a slit 0.139
+  wide between its free edge and the jamb. A 0.5 x 0.8 emitter (Le = 250, facing down) on the lit
+  room's ceiling beside the doorway (x in [0.05, 0.55], y in [0.6, 1.4]) is the only light. The
+  camera is in the dark room (x < 0) near the dividing wall, looking away from it: it sees no
+  emitter and no part of the slit. Next-event estimation from the dark room is occluded almost
+  everywhere (only a streak of floor lit through the slit is direct), so path tracing must find
+  the slit by BSDF sampling; light subpaths start beside the slit, pass it as rarely as camera
+  paths do, and every vertex beyond it connects to the camera.
 
 mirror_caustic.json: a caustic seen only in a mirror. A glass sphere (ior 1.5, radius 0.8,
   centre height 2) under a small emitter (0.2 x 0.2 at height 5, Le = 500, facing down) focuses it
@@ -101,8 +101,8 @@ def door_ajar():
             f" 0.7); dividing wall x = 0 with a doorway y in [{hy0}, {hy1}], z in [0, {dz}]",
             f"door 0.8 x 2 hinged at (0, {hy0}), open {DOOR_DEG:g} degrees into the lit room:"
             f" slit {slit:.3f} wide between its free edge and the jamb",
-            "emitter 1 x 1, Le = 250, on the lit room's ceiling facing down; the camera sees"
-            " neither it nor the slit",
+            "emitter 0.5 x 0.8, Le = 250, on the lit room's ceiling beside the doorway, facing"
+            " down; the camera sees neither it nor the slit",
             "path tracing must find the slit by BSDF sampling; light subpaths find it as often"
             " and connect to the camera (light, bdpt, vcm)",
         ],
