@@ -15,8 +15,8 @@
 # about 13 s, outside the timed render). So 11 scenes x 9 methods x (4.5 s CPU + 5 s GPU) = 16 min;
 # 12 min with the 7 methods of a binary without photon-map and radiosity (skipped in seconds).
 # Measured: `ONLY='door_ajar\|mirror_caustic\|enclosed_light' ATLAS_BACKENDS=cpu
-# ATLAS_SECONDS=2` (21 renders) 53 s; the other 8 scenes the same way 148 s; enclosed_light on
-# the GPU alone, 7 methods at 2 s, 20 s.
+# ATLAS_SECONDS=2` (21 renders) 51 s; the other 8 scenes the same way 148 s; the same 3 scenes
+# with ATLAS_BACKENDS=gpu 62 s (81 s with the adapter queries, montage and page).
 #
 # Knobs (environment): HEXRAY (default target/release/hexray); ATLAS_SECONDS (the time per
 # render); ATLAS_BACKENDS (default "cpu gpu"; gpu is left out when wgpu finds no adapter);
