@@ -5,7 +5,8 @@
 # docs/figures/stability/tests.log.
 #
 #   docs/figures/stability.sh references   # the long CPU references (tests/data/references/stability/;
-#                                          # about an hour on 2 cores: the 10^4 tiny light dominates)
+#                                          # about 80 min on 2 cores: the 10^4 tiny light dominates)
+#   ONLY=door_ajar\|enclosed_light docs/figures/stability.sh references   # only those
 #   docs/figures/stability.sh report       # pictures, curves, test values -> docs/figures/stability/,
 #                                          # then docs/stability.md (~25 min)
 #   docs/figures/stability.sh markdown     # docs/stability.md again from docs/figures/stability/
@@ -22,26 +23,34 @@ size=32
 # Seeds: references 1000000 (apart from every test's and picture's seed).
 ref_seed=1000000
 
-# name, scene file, reference spp
+# name, scene file, reference spp, method (unbiased on that scene: path, or bdpt where path
+# tracing's error falls too slowly). ONLY=name1\|name2 keeps those references (the others are
+# left as they are).
 reference_list() {
     cat <<'EOF'
-caustic scenes/stability/caustic.json 65536
-tiny_light_1e2 scenes/stability/tiny_light_1e2.json 65536
-tiny_light_1e0 scenes/tncg15_room.json 65536
-glass_room scenes/glass_room.json 65536
-tiny_light_1e4 scenes/stability/tiny_light_1e4.json 262144
-grazing scenes/stability/grazing.json 16384
-mirror_corridor scenes/stability/mirror_corridor.json 16384
-thin_slab scenes/stability/thin_slab.json 16384
+caustic scenes/stability/caustic.json 65536 path
+tiny_light_1e2 scenes/stability/tiny_light_1e2.json 65536 path
+tiny_light_1e0 scenes/tncg15_room.json 65536 path
+glass_room scenes/glass_room.json 65536 path
+tiny_light_1e4 scenes/stability/tiny_light_1e4.json 262144 path
+grazing scenes/stability/grazing.json 16384 path
+mirror_corridor scenes/stability/mirror_corridor.json 16384 path
+thin_slab scenes/stability/thin_slab.json 16384 path
+cornell_box scenes/cornell_box.json 262144 path
+door_ajar scenes/stability/door_ajar.json 524288 path
+mirror_caustic scenes/stability/mirror_caustic.json 131072 bdpt
+enclosed_light scenes/stability/enclosed_light.json 65536 bdpt
+tiny_light_1e2_bdpt scenes/stability/tiny_light_1e2.json 32768 bdpt
 EOF
 }
 
 references() {
     mkdir -p "$refs"
-    reference_list | while read -r name scene spp; do
-        echo "== $name: $spp spp"
-        "$hexray" reference "$scene" --backend cpu --method path --width $size --height $size --spp "$spp" \
-            --seed $ref_seed --out "$refs/${name}_32.exr" --quiet
+    reference_list | grep -e "^\(${ONLY:-.*}\) " | while read -r name scene spp method; do
+        echo "== $name: $spp spp of $method"
+        "$hexray" reference "$scene" --backend cpu --method "$method" --width $size --height $size \
+            --spp "$spp" --seed $ref_seed --out "$refs/${name}_32.exr" --quiet
+        rm -f "$refs/${name}_32.film"
     done
 }
 
