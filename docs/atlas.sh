@@ -20,7 +20,8 @@
 #
 # Knobs (environment): HEXRAY (default target/release/hexray); ATLAS_SECONDS (the time per
 # render); ATLAS_BACKENDS (default "cpu gpu"; gpu is left out when wgpu finds no adapter);
-# ONLY=name1\|name2 (scenes); METHODS (default the list below). A method the binary does not list
+# ONLY=name1\|name2 (scenes); METHODS (default the list below); ATLAS_KEEP=1 keeps the rows of
+# the methods not in METHODS in results.csv (to render one method again). A method the binary does not list
 # in `hexray render --help` is skipped with a note in results.csv; a render that fails (say, a
 # method without a GPU kernel) is recorded as failed with its first error line.
 # The references are tests/data/references/stability/NAME_32.exr, made by
@@ -28,7 +29,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 hexray=${HEXRAY:-target/release/hexray}
-methods=${METHODS:-path light bdpt sppm vcm vcm-full whitted photon-map radiosity}
+all_methods="path light bdpt sppm vcm vcm-full whitted photon-map radiosity"
+methods=${METHODS:-$all_methods}
 backends=${ATLAS_BACKENDS:-cpu gpu}
 seconds=${ATLAS_SECONDS:-4}
 refs=tests/data/references/stability
@@ -195,7 +197,20 @@ run() {
     echo "$(nproc) cores ($(sed -n 's/^model name\s*: //p' /proc/cpuinfo | head -1)); GPU backend on ${adapter:-no adapter}; $("$hexray" --version)" \
         > "$out/machine.txt"
     local csv=$out/results.csv start=$SECONDS
-    echo "scene,family,method,backend,status,seconds,spp,relmse,relmse_reference_noise,relmse_net,mean_ratio,note" > "$csv"
+    if [ -n "${ATLAS_KEEP:-}" ] && [ -f "$csv" ]; then
+        # Keep the other methods' rows; render METHODS again.
+        python3 - "$csv" $methods <<'PY'
+import csv, sys
+path, methods = sys.argv[1], set(sys.argv[2:])
+rows = list(csv.reader(open(path)))
+with open(path, "w", newline="") as f:
+    w = csv.writer(f, lineterminator="\n")
+    w.writerow(rows[0])
+    w.writerows(r for r in rows[1:] if r[2] not in methods)
+PY
+    else
+        echo "scene,family,method,backend,status,seconds,spp,relmse,relmse_reference_noise,relmse_net,mean_ratio,note" > "$csv"
+    fi
     scene_list | while read -r name scene ref family; do
         [ -f "$refs/$ref" ] || { echo "missing $refs/$ref: run docs/figures/stability.sh references" >&2; exit 1; }
         for b in $backend_list; do
@@ -227,7 +242,7 @@ montage() {
     local b
     for b in cpu gpu; do
         grep -q ",$b," "$out/results.csv" || continue
-        python3 - "$out/results.csv" "$b" "$work" "$refs" "$out/montage_$b.png" $methods <<'PY'
+        python3 - "$out/results.csv" "$b" "$work" "$refs" "$out/montage_$b.png" $all_methods <<'PY'
 import csv, os, struct, sys, zlib
 path, backend, work, refs, dest, methods = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6:]
 rows = [r for r in csv.DictReader(open(path)) if r["backend"] == backend]
@@ -297,7 +312,7 @@ PY
 markdown() {
     local block=$out/generated.md.tmp
     mkdir -p "$out"
-    python3 - "$out" "$seconds" <(why_list) <(all_scenes) $methods <<'PY' > "$block"
+    python3 - "$out" "$seconds" <(why_list) <(all_scenes) $all_methods <<'PY' > "$block"
 import csv, os, sys
 out, budget, why_path, scenes_path, methods = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5:]
 why = {}
