@@ -93,8 +93,8 @@ struct Frame {
     light_samples: u32,
     // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
     grey_indirect: u32,
-    // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM, METHOD_VCM, METHOD_VCM_FULL or
-    // METHOD_WHITTED.
+    // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM, METHOD_VCM, METHOD_VCM_FULL,
+    // METHOD_WHITTED or METHOD_RADIOSITY.
     method: u32,
     // N: light subpaths per iteration (one per pixel).
     n_light_paths: u32,
@@ -152,6 +152,7 @@ const METHOD_SPPM: u32 = 3u;
 const METHOD_VCM: u32 = 4u;
 const METHOD_VCM_FULL: u32 = 5u;
 const METHOD_WHITTED: u32 = 6u;
+const METHOD_RADIOSITY: u32 = 8u;
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).
 struct PixelSums {

@@ -37,6 +37,7 @@ mod module_graph;
 mod nothing_lost;
 mod photon_merging;
 mod precision;
+mod radiosity;
 mod reintersect;
 mod scene_parser;
 mod shaders;

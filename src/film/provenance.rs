@@ -35,3 +35,25 @@ pub fn merging_provenance(
         ),
     ]
 }
+
+/// Radiosity's settings and solve for a render's provenance: the patch size, the form-factor
+/// rays per patch, the patches, the Jacobi steps (and whether they converged) and the solve's
+/// seconds.
+pub fn radiosity_provenance(
+    settings: crate::transport::patches::RadiositySettings,
+    patches: usize,
+    steps: u32,
+    converged: bool,
+    seconds: f64,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("patch_size", format!("{}", settings.patch_size)),
+        ("patch_rays", settings.patch_rays.to_string()),
+        ("patches", patches.to_string()),
+        (
+            "jacobi_steps",
+            format!("{steps}{}", if converged { "" } else { " (not converged)" }),
+        ),
+        ("radiosity_solve_seconds", format!("{seconds:.3}")),
+    ]
+}
