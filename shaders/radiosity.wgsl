@@ -50,15 +50,17 @@ struct RadiosityParams {
 
 const NO_PATCHES: u32 = 0xffffffffu;
 
-// Group 1 from binding 7 on: the light-subpath methods' bindings 0 to 6 of group 1 are used by
-// other entry points of this module, never with these.
-@group(1) @binding(7) var<uniform> radiosity_params: RadiosityParams;
-@group(1) @binding(8) var<storage, read> patch_grids: array<PatchGrid>;
-@group(1) @binding(9) var<storage, read> patches: array<Patch>;
+// Group 2 (group 1 is the light-subpath methods'; radiosity's pipelines leave it empty).
+// The parameters as a read-only storage buffer, not a uniform one: with an eighth uniform buffer
+// beside the seven of the uniform residency (scene arrays and frame), lavapipe (Mesa 22.3)
+// corrupted its heap when the pipelines were destroyed.
+@group(2) @binding(0) var<storage, read> radiosity_params: RadiosityParams;
+@group(2) @binding(1) var<storage, read> patch_grids: array<PatchGrid>;
+@group(2) @binding(2) var<storage, read> patches: array<Patch>;
 // F, row-major N x N.
-@group(1) @binding(10) var<storage, read_write> form_factors: array<f32>;
+@group(2) @binding(3) var<storage, read_write> form_factors: array<f32>;
 // L of two Jacobi steps (ping-pong, N each), then each patch's indirect light (N).
-@group(1) @binding(11) var<storage, read_write> radiosity: array<vec4<f32>>;
+@group(2) @binding(4) var<storage, read_write> radiosity: array<vec4<f32>>;
 
 // The grid of primitive prim (a `prims` reference).
 fn patch_grid(prim: u32) -> PatchGrid {

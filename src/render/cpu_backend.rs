@@ -70,7 +70,7 @@ impl Backend for CpuBackend<'_> {
                 s.patches.len(),
                 s.steps,
                 s.converged,
-                s.form_factor_seconds + s.solve_seconds,
+                (s.form_factor_seconds, s.solve_seconds),
             );
         }
         let mut out = match &self.buffers {

@@ -2,6 +2,7 @@
 //! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
 
 mod iterations;
+mod radiosity;
 
 use super::bidirectional::Bidirectional;
 use super::frame::{
@@ -203,7 +204,7 @@ impl GpuRenderer {
             )?;
             (None, Some(b))
         } else if method == Method::Radiosity {
-            // The image pass reads the solution through bind group 1, as the solve kernels do.
+            // The image pass reads the solution through bind group 2, as the solve kernels do.
             let r = Radiosity::new(
                 device,
                 &module,
@@ -213,8 +214,12 @@ impl GpuRenderer {
                 seed,
                 faults,
             );
-            let pipeline =
-                compute_pipeline(device, &module, &[&layout, &r.layout], "radiosity_pass");
+            let pipeline = compute_pipeline(
+                device,
+                &module,
+                &[&layout, &r.empty_layout, &r.layout],
+                "radiosity_pass",
+            );
             radiosity = Some(r);
             (Some(pipeline), None)
         } else {
@@ -442,8 +447,11 @@ impl GpuRenderer {
                 let mut cpass = encoder.begin_compute_pass(&Default::default());
                 cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
                 cpass.set_bind_group(0, &self.bind_group, &[]);
-                if let Some(solved) = self.radiosity.as_ref().and_then(|r| r.solved.as_ref()) {
-                    cpass.set_bind_group(1, &solved.bind_group, &[]);
+                if let Some(r) = &self.radiosity {
+                    if let Some(solved) = &r.solved {
+                        cpass.set_bind_group(1, &r.empty_group, &[]);
+                        cpass.set_bind_group(2, &solved.bind_group, &[]);
+                    }
                 }
                 cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
             }
