@@ -315,19 +315,18 @@ fn the_cornell_box_check_rejects_direct_light_counted_twice() {
     assert!(e > CORNELL_BIAS_AT_DEFAULT, "{e:e}");
 }
 
-/// The largest relative difference of a patch's radiance between two solutions (channels
-/// below 1e-3 of the largest compared absolutely), and the share of form factors that differ.
+/// The largest relative difference of a patch's radiance or indirect light between two
+/// solutions (channels below 1e-3 of the largest compared absolutely), and the share of form
+/// factors that differ.
 fn solution_difference(a: &Solved, b: &Solved) -> (f64, f64) {
-    let top = a
-        .radiance
-        .iter()
-        .map(|l| l.max_element())
-        .fold(0.0f32, f32::max) as f64;
     let mut worst = 0.0f64;
-    for (x, y) in a.radiance.iter().zip(&b.radiance) {
-        for c in 0..3 {
-            let d = (x[c] as f64 - y[c] as f64).abs() / (x[c] as f64).max(1e-3 * top);
-            worst = worst.max(d);
+    for (xs, ys) in [(&a.radiance, &b.radiance), (&a.indirect, &b.indirect)] {
+        let top = xs.iter().map(|l| l.max_element()).fold(0.0f32, f32::max) as f64;
+        for (x, y) in xs.iter().zip(ys.iter()) {
+            for c in 0..3 {
+                let d = (x[c] as f64 - y[c] as f64).abs() / (x[c] as f64).max(1e-3 * top);
+                worst = worst.max(d);
+            }
         }
     }
     let differing = a
