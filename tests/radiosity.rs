@@ -11,7 +11,7 @@ use hexray::film::Film;
 use hexray::transport::faults::Faults;
 use hexray::transport::method::Method;
 use hexray::transport::patches::JACOBI_TOLERANCE;
-use hexray::transport::patches::{Patches, RadiositySettings};
+use hexray::transport::patches::{Patches, RadiositySettings, DEFAULT_PATCH_SIZE};
 
 /// A solution as the tests read it, from either backend: the patch table, F (row-major) and
 /// each patch's radiance and indirect light.
@@ -105,7 +105,8 @@ fn furnace_departure(backend: Backend, faults: Faults) -> f64 {
 
 /// What the solve may leave of B = E / (1 − ρ): Jacobi stops at a relative change below
 /// JACOBI_TOLERANCE, which leaves about that times ρ / (1 − ρ) (= 1 here), and f32 sums of N
-/// terms round by a few 1e-7. Measured: see `the_furnace_radiosity_is_le_over_1_minus_rho`.
+/// terms round by a few 1e-7. Measured: 7.6e-6 on both backends (patch size 0.1, 256 rays, 600
+/// patches, 300 of them inside); inside the emitting sphere every pixel is 0.9999961.
 fn furnace_allowance() -> f64 {
     2.0 * JACOBI_TOLERANCE as f64
 }
@@ -154,7 +155,8 @@ fn extremes(film: &Film) -> (f64, f64) {
     (lo, hi)
 }
 
-/// A row of F may lose this much in the closed furnace: one ray in 256 (none measured).
+/// A row of F may lose this much in the closed furnace: one ray in 256 (measured: none lost, the
+/// rows sum to 1 exactly on both backends).
 const ROW_SUM_ALLOWANCE: f64 = 1.0 / 256.0;
 
 /// The largest |Σ_j F_ij − 1| over the furnace's inner patches.
@@ -169,8 +171,9 @@ fn furnace_row_sums(backend: Backend, faults: Faults) -> f64 {
 }
 
 /// The furnace tests have power: form-factor rays that count 99 % of 1/R (rows summing to 0.99)
-/// give L = 0.5 / (1 − 0.495) = 0.990, rejected by the radiosity check, and rows 0.01 short,
-/// rejected by the row-sum check.
+/// give L = 0.5 / (1 − 0.495) = 0.990, rejected by the radiosity check (measured 9.9e-3 against
+/// the allowance 2e-5), and rows 0.01 short, rejected by the row-sum check (1.0e-2 against
+/// 3.9e-3).
 #[test]
 fn the_furnace_tests_reject_form_factors_1_percent_short() {
     let short = Faults {
@@ -232,7 +235,8 @@ on_each_backend! {
 }
 
 /// The reciprocity check has power: rays leaving uniformly over the hemisphere instead of
-/// cosine-distributed (F'_ij ∝ ∫∫ cos θj / r², not symmetric) are rejected.
+/// cosine-distributed (F'_ij ∝ ∫∫ cos θj / r², not symmetric) are rejected: mean z² 8.04 over
+/// 1390 pairs, against at most 1.19 (correct: 0.974 over 1449 pairs on both backends).
 #[test]
 fn the_reciprocity_check_rejects_uniform_form_factor_rays() {
     let uniform = Faults {
@@ -288,14 +292,14 @@ fn cornell_bias(patch_size: f32, faults: Faults) -> f64 {
 }
 
 /// The most relMSE (less noise) the default patch size may leave on cornell_box: measured
-/// below, with room.
+/// 7.9e-4 (and 2.58e-3 at 0.2, 1.63e-3 at 0.1; docs/methods.md, "Radiosity").
 const CORNELL_BIAS_AT_DEFAULT: f64 = 2e-3;
 
 /// The error against the path-traced reference falls as patches shrink (0.2, 0.1, 0.05 of the
 /// scene's diagonal), and is small at the default.
 #[test]
 fn cornell_box_error_falls_as_patches_shrink() {
-    let e: Vec<f64> = [0.2, 0.1, 0.05]
+    let e: Vec<f64> = [0.2, 0.1, DEFAULT_PATCH_SIZE]
         .iter()
         .map(|&s| cornell_bias(s, Faults::NONE))
         .collect();
@@ -304,14 +308,15 @@ fn cornell_box_error_falls_as_patches_shrink() {
 }
 
 /// The cornell_box check has power: indirect light that also counts the neighbours' emission
-/// (direct light twice, with next-event estimation's) is rejected at the default patch size.
+/// (direct light twice, with next-event estimation's) is rejected at the default patch size:
+/// measured 8.25e-2 against at most 2e-3.
 #[test]
 fn the_cornell_box_check_rejects_direct_light_counted_twice() {
     let twice = Faults {
         indirect_with_direct: true,
         ..Faults::NONE
     };
-    let e = cornell_bias(0.05, twice);
+    let e = cornell_bias(DEFAULT_PATCH_SIZE, twice);
     assert!(e > CORNELL_BIAS_AT_DEFAULT, "{e:e}");
 }
 
@@ -378,7 +383,8 @@ fn gpu_radiosity_solution_equals_cpu() {
     }
 }
 
-/// The solution check has power: a GPU whose form-factor rays count 99 % is rejected.
+/// The solution check has power: a GPU whose form-factor rays count 99 % is rejected (measured
+/// 7.1e-2 against 1e-3; correct: 0, the same form factors bit for bit).
 #[test]
 fn the_solution_check_rejects_gpu_form_factors_1_percent_short() {
     let short = Faults {
@@ -418,7 +424,7 @@ fn gpu_radiosity_image_equals_cpu_on_the_same_streams() {
 }
 
 /// The same-streams check has power: a GPU image whose indirect light counts direct light too
-/// is rejected.
+/// is rejected (measured relMSE 0.247 against 1e-5; correct: 2.5e-15).
 #[test]
 fn the_radiosity_same_streams_check_rejects_direct_light_counted_twice() {
     let twice = Faults {
