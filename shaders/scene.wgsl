@@ -94,7 +94,7 @@ struct Frame {
     // Test-only: grey the light gathered after the first diffuse bounce (`Faults`), 0 or 1.
     grey_indirect: u32,
     // METHOD_PATH, METHOD_LIGHT, METHOD_BDPT, METHOD_SPPM, METHOD_VCM, METHOD_VCM_FULL,
-    // METHOD_WHITTED or METHOD_PHOTON_MAP.
+    // METHOD_WHITTED, METHOD_PHOTON_MAP or METHOD_RADIOSITY.
     method: u32,
     // N: light subpaths per iteration (one per pixel).
     n_light_paths: u32,
@@ -153,6 +153,7 @@ const METHOD_VCM: u32 = 4u;
 const METHOD_VCM_FULL: u32 = 5u;
 const METHOD_WHITTED: u32 = 6u;
 const METHOD_PHOTON_MAP: u32 = 7u;
+const METHOD_RADIOSITY: u32 = 8u;
 
 // The sums of one pass of samples of one pixel (folded into f64 on the host).
 struct PixelSums {

@@ -4,9 +4,11 @@
 
 use hexray::accel::hash_grid::GridParams;
 use hexray::gpu::frame::{Frame, PixelSums};
+use hexray::gpu::radiosity::RadiosityParams;
 use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
 use hexray::layout::{BvhNode, Emitter, Material, PlanarMirror, Sphere, Triangle};
 use hexray::transport::camera::Camera;
+use hexray::transport::patches::{Patch, PatchGrid};
 use hexray::transport::subpath::LightVertex;
 use std::mem::{offset_of, size_of};
 
@@ -163,6 +165,31 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             sum_sq,
             dropped
         }),
+        rust_layout!(PatchGrid { first, n, m, sides }),
+        rust_layout!(Patch {
+            albedo,
+            prim,
+            emission,
+            cell,
+            side,
+            area,
+            pad0,
+            pad1
+        }),
+        rust_layout!(RadiosityParams {
+            patch_count,
+            rays_per_patch,
+            first_ray,
+            ray_count,
+            seed,
+            triangle_count,
+            step_input,
+            step_output,
+            form_factor_scale,
+            uniform_directions,
+            indirect_with_direct,
+            pad0
+        }),
     ];
     for (name, size, fields) in shared {
         let (wsize, wfields) = wgsl_layout(&module, name);
@@ -226,6 +253,7 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
     use hexray::math::sampling::{DIM_CAMERA, DIM_EMISSION, DIM_EMISSION_DIR};
     use hexray::transport::clearance::{COPLANAR_COS, COPLANAR_OFFSET};
     use hexray::transport::merging::FOOTPRINT_FLOOR;
+    use hexray::transport::patches::{DIM_FORM_FACTOR, NO_PATCHES};
     use hexray::transport::planar_mirror::{BOUNDS_SLACK, MAX_PLANAR_MIRRORS, NO_PLANAR_MIRROR};
     use hexray::transport::splat::FRACTION_BITS;
     use hexray::transport::subpath::{LIGHT_SUBPATH_RR_START_BOUNCE, NO_VERTEX};
@@ -255,6 +283,8 @@ fn shared_constants() -> Vec<(&'static str, f64)> {
         FOOTPRINT_FLOOR,
         QUERY_MARGIN,
         WHITTED_MAX_DEPTH,
+        DIM_FORM_FACTOR,
+        NO_PATCHES,
     )
 }
 

@@ -38,6 +38,7 @@ mod nothing_lost;
 mod photon_map;
 mod photon_merging;
 mod precision;
+mod radiosity;
 mod reintersect;
 mod scene_parser;
 mod shaders;

@@ -6,12 +6,13 @@
 use crate::common::repo;
 
 /// The integrators and their twins.
-const TWINS: [(&str, &str); 5] = [
+const TWINS: [(&str, &str); 6] = [
     ("src/cpu/path.rs", "shaders/path.wgsl"),
     ("src/cpu/light_path.rs", "shaders/light_path.wgsl"),
     ("src/cpu/bdpt.rs", "shaders/bdpt.wgsl"),
     ("src/cpu/whitted.rs", "shaders/whitted.wgsl"),
     ("src/cpu/photon_map.rs", "shaders/photon_map.wgsl"),
+    ("src/cpu/radiosity.rs", "shaders/radiosity.wgsl"),
 ];
 
 /// The steps of a source text, in order: (number, name), the name being the words after

@@ -107,6 +107,15 @@ pub(crate) fn parse_radius(s: &str) -> std::result::Result<f32, String> {
     }
 }
 
+pub(crate) fn parse_patch_size(s: &str) -> std::result::Result<f32, String> {
+    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err("the patch size is a share of the scene's diagonal, in (0, 1]".into())
+    }
+}
+
 pub(crate) fn parse_alpha(s: &str) -> std::result::Result<f32, String> {
     let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if v > 0.0 && v <= 1.0 {

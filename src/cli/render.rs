@@ -44,9 +44,12 @@ pub(crate) struct RenderArgs {
     /// photons: consistent, not unbiased (the bias shrinks with the radius over iterations; the
     /// standard error does not cover it). `whitted` is biased: direct light and perfect mirrors
     /// and glass only, without indirect diffuse light or caustics. `photon-map` is biased: its
-    /// density estimates within a fixed radius blur the light, whatever the samples. Default:
-    /// vcm for `render` (the lowest error at equal time on the reference scenes,
-    /// docs/methods.md), path for `reference` (unbiased).
+    /// density estimates within a fixed radius blur the light, whatever the samples.
+    /// `radiosity` is biased: it solves the diffuse light once on patches (--patch-size,
+    /// --patch-rays) and takes each patch's indirect light as constant over it; it leaves out
+    /// caustics and indirect light by way of mirrors or glass. Default: vcm for `render` (the
+    /// lowest error at equal time on the reference scenes, docs/methods.md), path for
+    /// `reference` (unbiased).
     #[arg(long, value_enum)]
     pub(crate) method: Option<Method>,
     /// Initial merge radius r_1 of sppm, vcm and vcm-full, in scene units, the same at every
@@ -60,6 +63,18 @@ pub(crate) struct RenderArgs {
     /// vcm-full with 0 are bdpt.
     #[arg(long, value_parser = parse_radius)]
     pub(crate) radius: Option<f32>,
+    /// Radiosity's largest patch, as a share of the diagonal of the scene's bounding box: each
+    /// diffuse triangle is cut into n x n sub-triangles and each sphere into bands and sectors
+    /// of at most (share x diagonal)² each. Default 0.05 (measured on cornell_box,
+    /// docs/methods.md). The dense form-factor matrix takes 4 N² bytes for N patches (each
+    /// triangle's two sides are two patches); a scene with more than 16384 patches, or more
+    /// than the GPU binds, is refused.
+    #[arg(long, value_parser = parse_patch_size)]
+    pub(crate) patch_size: Option<f32>,
+    /// Radiosity's form-factor rays per patch (default 1024): F_ij is the share of patch i's
+    /// cosine-distributed rays that first meet patch j.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1048576))]
+    pub(crate) patch_rays: Option<u32>,
     /// The view's reach of a resumed render (`MergeRadius::reach`), taken from its film.
     #[arg(skip)]
     pub(crate) reach: Option<f32>,
@@ -116,7 +131,7 @@ pub(crate) struct RenderArgs {
     /// seed, method, size and radius. The new samples continue the random streams, so on the
     /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
     /// unless --out says otherwise.
-    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples"])]
+    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples", "patch_size", "patch_rays"])]
     pub(crate) resume: Option<PathBuf>,
     /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
     /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
@@ -252,6 +267,8 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
         .merge_alpha
         .filter(|_| args.method.is_some_and(Method::progressive));
     args.light_paths = id.light_paths;
+    args.patch_size = id.patch_size;
+    args.patch_rays = id.patch_rays;
     args.scene.get_or_insert_with(|| PathBuf::from(&id.scene));
     args.out.get_or_insert_with(|| exr.to_path_buf());
     Ok((film, id))
@@ -317,6 +334,7 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
         &camera,
     )
     .map_err(refuse)?;
+    let radiosity = radiosity_settings_of(args, method, &flat)?;
     // The last check before any work: the outputs can be written (not found after the render).
     output::check_writable(&out, args.variance)
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
@@ -340,9 +358,12 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
             cpu.light_samples = args.light_samples;
             cpu.method = method;
             cpu.radius = Some(radius);
+            cpu.radiosity = radiosity;
             Box::new(cpu)
         }
-        Some(g) => Box::new(gpu_backend(args, g, &flat, camera, method, radius)?),
+        Some(g) => Box::new(gpu_backend(
+            args, g, &flat, camera, method, radius, radiosity,
+        )?),
     };
     if !args.quiet {
         log_scene(&scene, &scene_path, &flat, args, backend.as_ref());
@@ -352,6 +373,7 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
         args,
         method,
         radius,
+        radiosity,
         scene: &scene,
         scene_path: &scene_path,
         earlier_seconds: resumed.as_ref().map_or(0.0, |(_, id)| id.render_seconds),
@@ -501,6 +523,47 @@ fn output_path(args: &RenderArgs, scene_path: &Path) -> Step<PathBuf> {
     Ok(out)
 }
 
+/// Radiosity's settings: --patch-size and --patch-rays only with --method radiosity, and a
+/// scene whose patches at that size fit the CPU's form-factor matrix (the GPU's binding is
+/// checked with its limits, `gpu_backend`).
+fn radiosity_settings_of(
+    args: &RenderArgs,
+    method: Method,
+    flat: &FlatScene,
+) -> Step<hexray::transport::patches::RadiositySettings> {
+    use hexray::transport::patches::{
+        check_count, RadiositySettings, CPU_LIMIT_REASON, MAX_PATCHES,
+    };
+    if method != Method::Radiosity {
+        if args.patch_size.is_some() || args.patch_rays.is_some() {
+            return Err(refuse(format!(
+                "--patch-size and --patch-rays are for --method radiosity, not {method}"
+            )));
+        }
+        return Ok(RadiositySettings::default());
+    }
+    let mut settings = RadiositySettings::default();
+    if let Some(size) = args.patch_size {
+        settings.patch_size = size;
+    }
+    if let Some(rays) = args.patch_rays {
+        settings.patch_rays = rays;
+    }
+    let n = check_count(
+        flat,
+        settings.patch_size,
+        MAX_PATCHES as u64,
+        CPU_LIMIT_REASON,
+    )
+    .map_err(|e| refuse(format!("--patch-size {}: {e}", settings.patch_size)))?;
+    if n == 0 {
+        return Err(refuse(
+            "--method radiosity: the scene has no diffuse surface to cut into patches",
+        ));
+    }
+    Ok(settings)
+}
+
 /// --light-samples above 1 is path tracing's alone.
 fn check_light_samples(args: &RenderArgs, method: Method) -> Step<()> {
     if args.light_samples > 1 && method != Method::Path {
@@ -599,6 +662,7 @@ fn gpu_backend(
     camera: Camera,
     method: Method,
     radius: hexray::transport::merging::MergeRadius,
+    radiosity: hexray::transport::patches::RadiositySettings,
 ) -> Step<hexray::render::GpuBackend> {
     let checks = if args.shader_checks {
         gpu::Checks::Checked
@@ -614,6 +678,14 @@ fn gpu_backend(
     gpu::limits::check_scene_fits(&limits, residency, flat)
         .and_then(|_| gpu::limits::check_image_fits(&limits, method, args.width, args.height))
         .map_err(|e| refuse(format!("--backend gpu: {e}")))?;
+    if method == Method::Radiosity {
+        gpu::radiosity::check_patches_fit(&limits, flat, radiosity).map_err(|e| {
+            refuse(format!(
+                "--backend gpu, --patch-size {}: {e}",
+                radiosity.patch_size
+            ))
+        })?;
+    }
     let compile = std::time::Instant::now();
     let mut renderer = gpu::GpuRenderer::new(
         &g.device,
@@ -629,6 +701,7 @@ fn gpu_backend(
     )?;
     renderer.set_light_samples(args.light_samples);
     renderer.set_merge_radius(radius);
+    renderer.set_radiosity(radiosity);
     if !args.quiet {
         eprintln!(
             "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
@@ -677,6 +750,8 @@ struct Record<'a> {
     args: &'a RenderArgs,
     method: Method,
     radius: hexray::transport::merging::MergeRadius,
+    /// Radiosity's patch size and rays (recorded only for --method radiosity).
+    radiosity: hexray::transport::patches::RadiositySettings,
     scene: &'a Scene,
     scene_path: &'a Path,
     earlier_seconds: f64,
@@ -728,6 +803,8 @@ impl Record<'_> {
             merge_reach: (merges && self.radius.reach > 0.0).then_some(self.radius.reach),
             merge_alpha: merges.then_some(self.radius.alpha),
             light_paths: self.radius.light_paths,
+            patch_size: (method == Method::Radiosity).then_some(self.radiosity.patch_size),
+            patch_rays: (method == Method::Radiosity).then_some(self.radiosity.patch_rays),
             scene: self.scene_path.display().to_string(),
             scene_sha1: self.scene.sha1.clone(),
             render_seconds: self.earlier_seconds + seconds,

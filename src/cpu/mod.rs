@@ -7,6 +7,7 @@ pub mod light_path;
 pub mod path;
 pub mod path_wavefront;
 pub mod photon_map;
+pub mod radiosity;
 pub mod shadow_probe;
 pub mod whitted;
 
@@ -126,6 +127,50 @@ pub fn render_whitted_pass_until(
                 let sampler = Sampler::new(seed, index, s);
                 stats.add(whitted::trace_whitted(
                     scene, camera, x, y, &sampler, faults, rays,
+                ));
+            }
+        }
+    })
+}
+
+/// Adds samples `first..first + count` of radiosity's image (`radiosity::trace_radiosity`,
+/// over the solved `solution`) to every pixel of `film`, as [`render_whitted_pass`] does
+/// Whitted's. Returns the number of rays traced.
+#[allow(clippy::too_many_arguments)]
+pub fn render_radiosity_pass(
+    scene: &FlatScene,
+    camera: &Camera,
+    solution: &radiosity::Solution,
+    seed: u32,
+    first: u32,
+    count: u32,
+    faults: Faults,
+    film: &mut Film,
+) -> u64 {
+    render_radiosity_pass_until(
+        scene, camera, solution, seed, first, count, faults, film, &NEVER,
+    )
+}
+
+/// [`render_radiosity_pass`] until `stop` is set, as [`render_pass_until`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_radiosity_pass_until(
+    scene: &FlatScene,
+    camera: &Camera,
+    solution: &radiosity::Solution,
+    seed: u32,
+    first: u32,
+    count: u32,
+    faults: Faults,
+    film: &mut Film,
+    stop: &AtomicBool,
+) -> u64 {
+    render_tiles_until(film, stop, |tile, stats, rays| {
+        for (&(index, x, y), stats) in tile.iter().zip(stats) {
+            for s in first..first + count {
+                let sampler = Sampler::new(seed, index, s);
+                stats.add(radiosity::trace_radiosity(
+                    scene, camera, solution, x, y, &sampler, faults, rays,
                 ));
             }
         }

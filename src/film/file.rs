@@ -56,6 +56,11 @@ pub struct FilmIdentity {
     /// `--light-paths` as asked for (absent where N took its default, `merging::light_paths`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub light_paths: Option<u32>,
+    /// Radiosity's `--patch-size` and `--patch-rays` as rendered (absent for other methods).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch_size: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch_rays: Option<u32>,
     /// The scene file as given, and the SHA-1 of its bytes.
     pub scene: String,
     pub scene_sha1: String,
@@ -235,6 +240,8 @@ mod tests {
             merge_alpha: Some(0.75),
             merge_reach: Some(7.5),
             light_paths: Some(1000),
+            patch_size: None,
+            patch_rays: None,
             scene: "scenes/x.json".into(),
             scene_sha1: "0123".into(),
             render_seconds: 1.5,

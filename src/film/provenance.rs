@@ -35,3 +35,33 @@ pub fn merging_provenance(
         ),
     ]
 }
+
+/// Radiosity's settings and solve for a render's provenance: the patch size, the form-factor
+/// rays per patch, the patches, the Jacobi steps (and whether they converged) and the seconds
+/// of the form factors and of the rest of the solve.
+pub fn radiosity_provenance(
+    settings: crate::transport::patches::RadiositySettings,
+    patches: usize,
+    steps: u32,
+    converged: bool,
+    seconds: (f64, f64),
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("patch_size", format!("{}", settings.patch_size)),
+        ("patch_rays", settings.patch_rays.to_string()),
+        ("patches", patches.to_string()),
+        (
+            "jacobi_steps",
+            format!("{steps}{}", if converged { "" } else { " (not converged)" }),
+        ),
+        (
+            "radiosity_solve_seconds",
+            format!(
+                "{:.3} (form factors {:.3}, Jacobi and indirect light {:.3})",
+                seconds.0 + seconds.1,
+                seconds.0,
+                seconds.1
+            ),
+        ),
+    ]
+}

@@ -29,7 +29,7 @@ pub struct Frame {
     /// `Faults::grey_indirect` as 0 or 1 (test-only).
     pub grey_indirect: u32,
     /// `METHOD_*` in `shaders/scene.wgsl`: 0 path, 1 light, 2 bdpt, 3 sppm, 4 vcm, 5 vcm-full,
-    /// 6 whitted, 7 photon-map.
+    /// 6 whitted, 7 photon-map, 8 radiosity.
     pub method: u32,
     /// N: light subpaths per iteration (one per pixel).
     pub n_light_paths: u32,
@@ -119,6 +119,7 @@ impl Frame {
                 Method::VcmFull => 5,
                 Method::Whitted => 6,
                 Method::PhotonMap => 7,
+                Method::Radiosity => 8,
             },
             n_light_paths: camera.width * camera.height,
             slot: 0,

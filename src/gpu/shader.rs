@@ -21,7 +21,7 @@ pub const BINDINGS_UNIFORM: (&str, &str) = (
     include_str!("../../shaders/bindings_uniform.wgsl"),
 );
 /// The files after the bindings, in dependency order.
-pub const BODY: [(&str, &str); 18] = [
+pub const BODY: [(&str, &str); 19] = [
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("geometry.wgsl", include_str!("../../shaders/geometry.wgsl")),
     ("bvh.wgsl", include_str!("../../shaders/bvh.wgsl")),
@@ -42,6 +42,10 @@ pub const BODY: [(&str, &str); 18] = [
     ("subpath.wgsl", include_str!("../../shaders/subpath.wgsl")),
     ("path.wgsl", include_str!("../../shaders/path.wgsl")),
     ("whitted.wgsl", include_str!("../../shaders/whitted.wgsl")),
+    (
+        "radiosity.wgsl",
+        include_str!("../../shaders/radiosity.wgsl"),
+    ),
     (
         "light_path.wgsl",
         include_str!("../../shaders/light_path.wgsl"),

@@ -23,6 +23,10 @@ pub struct CpuBackend<'a> {
     pub radius: Option<crate::transport::merging::MergeRadius>,
     /// The light-subpath methods: the light pass's splats and vertices, made at the first pass.
     buffers: Option<crate::cpu::LightPassBuffers>,
+    /// Radiosity's patch size and form-factor rays (default: `RadiositySettings::default`).
+    pub radiosity: crate::transport::patches::RadiositySettings,
+    /// Radiosity's solution, solved before the first pass.
+    pub solution: Option<crate::cpu::radiosity::Solution>,
 }
 
 impl<'a> CpuBackend<'a> {
@@ -46,6 +50,8 @@ impl<'a> CpuBackend<'a> {
             pool,
             radius: None,
             buffers: None,
+            radiosity: Default::default(),
+            solution: None,
         })
     }
 }
@@ -58,6 +64,15 @@ impl Backend for CpuBackend<'_> {
         format!("{} threads", self.pool.current_num_threads())
     }
     fn provenance(&self) -> Vec<(&'static str, String)> {
+        if let Some(s) = &self.solution {
+            return crate::film::provenance::radiosity_provenance(
+                self.radiosity,
+                s.patches.len(),
+                s.steps,
+                s.converged,
+                (s.form_factor_seconds, s.solve_seconds),
+            );
+        }
         let mut out = match &self.buffers {
             Some(b) if self.method.connects() => bidirectional_provenance(
                 b.shadow_threshold,
@@ -102,6 +117,25 @@ impl Backend for CpuBackend<'_> {
             return Ok(());
         }
         check_film_for(method, film)?;
+        if method == crate::transport::method::Method::Radiosity {
+            if self.solution.is_none() {
+                let patches =
+                    crate::transport::patches::Patches::build(scene, self.radiosity.patch_size)?;
+                let settings = self.radiosity;
+                let (solution, rays) = self.pool.install(|| {
+                    crate::cpu::radiosity::solve(scene, patches, seed, settings.patch_rays, faults)
+                });
+                self.rays += rays;
+                self.solution = Some(solution);
+            }
+            let solution = self.solution.as_ref().expect("solved above");
+            self.rays += self.pool.install(|| {
+                crate::cpu::render_radiosity_pass_until(
+                    scene, camera, solution, seed, first, count, faults, film, stop,
+                )
+            });
+            return Ok(());
+        }
         if method == crate::transport::method::Method::Whitted {
             self.rays += self.pool.install(|| {
                 crate::cpu::render_whitted_pass_until(

@@ -40,6 +40,16 @@ pub struct Faults {
     /// normalisation, the splats and the MIS weights count one per pixel instead of N (false
     /// when correct).
     pub light_paths_counted_per_pixel: bool,
+    /// Radiosity: each form-factor ray counts this share of 1 / R (1 when correct), so that
+    /// the rows of a closed scene sum to it instead of 1.
+    pub form_factor_scale: f32,
+    /// Radiosity: form-factor rays leave their patch uniformly over the hemisphere instead of
+    /// cosine-distributed, which breaks reciprocity A_i F_ij = A_j F_ji (false when correct).
+    pub form_factor_uniform_directions: bool,
+    /// Radiosity: a patch's indirect light also counts its neighbours' emission,
+    /// ρ_i Σ_j F_ij L_j, so that direct light is counted twice with next-event estimation's
+    /// (false when correct).
+    pub indirect_with_direct: bool,
 }
 
 impl Faults {
@@ -54,6 +64,9 @@ impl Faults {
         mirror_light_twice: false,
         merge_ignores_clearance: false,
         light_paths_counted_per_pixel: false,
+        form_factor_scale: 1.0,
+        form_factor_uniform_directions: false,
+        indirect_with_direct: false,
     };
 }
 

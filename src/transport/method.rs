@@ -44,6 +44,13 @@ pub enum Method {
     /// diffuse point, where the direct light and both maps are taken). Biased: the fixed radius
     /// blurs the light (not progressive, so the bias does not shrink with samples).
     PhotonMap,
+    /// Radiosity (`src/cpu/radiosity.rs`): the diffuse surfaces cut into patches, their form
+    /// factors by ray casting and the radiosity equation solved once by Jacobi iterations;
+    /// the image follows mirrors and glass as Whitted's to the first diffuse surface, takes
+    /// direct light there by next-event estimation and the indirect light of the patch solution.
+    /// Biased: the indirect light is constant over each patch, and it leaves out caustics and
+    /// the indirect light that passes a mirror or glass.
+    Radiosity,
 }
 
 impl Method {
@@ -58,7 +65,8 @@ impl Method {
 
     /// Samples (iterations) when neither `--spp` nor `--time` is given, so that the default
     /// render (tncg15_room, 512x512) takes about as long as path tracing's 64 samples: 64 of
-    /// path tracing and of Whitted (whose samples cost less); 8 of the methods that trace a light subpath and a camera subpath per pixel
+    /// path tracing, of Whitted and of radiosity (whose samples cost less; radiosity's solve comes
+    /// once, before them); 8 of the methods that trace a light subpath and a camera subpath per pixel
     /// and iteration, which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost
     /// more as the image grows, since every pixel adds a photon). vcm took 20 while its radius
     /// was 0.01 of the scene's; within the clearance at 0.03 its merges gather nine times the
@@ -66,7 +74,7 @@ impl Method {
     /// 20 iterations of vcm in 17.1 s, 7 in 6.3 s).
     pub fn default_samples(self) -> u32 {
         match self {
-            Method::Path | Method::Whitted => 64,
+            Method::Path | Method::Whitted | Method::Radiosity => 64,
             _ => 8,
         }
     }
@@ -81,6 +89,7 @@ impl Method {
             Method::VcmFull => "vcm-full",
             Method::Whitted => "whitted",
             Method::PhotonMap => "photon-map",
+            Method::Radiosity => "radiosity",
         }
     }
 
@@ -96,7 +105,7 @@ impl Method {
     /// (splatted or merged), so that an iteration's pixels share samples and its statistics
     /// are batch means (`film.rs`).
     pub fn splats(self) -> bool {
-        !matches!(self, Method::Path | Method::Whitted)
+        !matches!(self, Method::Path | Method::Whitted | Method::Radiosity)
     }
 
     /// The light the method leaves out by construction, a bias that no number of samples
@@ -108,12 +117,18 @@ impl Method {
                 "indirect diffuse light and caustics (light that reaches a diffuse surface by way \
                  of a mirror or glass)",
             ),
+            Method::Radiosity => Some(
+                "caustics and indirect light by way of mirrors or glass, and the variation of \
+                 indirect light within a patch (constant per patch, form factors from a finite \
+                 number of rays)",
+            ),
             _ => None,
         }
     }
 
-    /// Whether the method merges photons: consistent rather than unbiased, with a bias that
-    /// the film's standard error does not cover and that vanishes as the radius shrinks.
+    /// Whether the method merges photons (density estimation within a radius): biased by the
+    /// radius, a bias that the film's standard error does not cover and that vanishes as the
+    /// radius shrinks over iterations in the progressive ones (consistent, not unbiased).
     pub fn merges(self) -> bool {
         matches!(
             self,

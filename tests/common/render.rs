@@ -7,7 +7,9 @@
 
 use super::{load, repo};
 use hexray::cpu::shadow_probe::shadow_threshold_for;
-use hexray::cpu::{render_iterations, render_pass, render_whitted_pass, LightPassBuffers};
+use hexray::cpu::{
+    render_iterations, render_pass, render_radiosity_pass, render_whitted_pass, LightPassBuffers,
+};
 use hexray::film::Film;
 use hexray::gpu::{Checks, GpuRenderer, Residency};
 use hexray::layout::FlatScene;
@@ -16,6 +18,7 @@ use hexray::transport::camera::Camera;
 use hexray::transport::faults::Faults;
 use hexray::transport::merging::MergeRadius;
 use hexray::transport::method::Method;
+use hexray::transport::patches::{Patches, RadiositySettings};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -57,6 +60,7 @@ pub struct Render<'a> {
     light_samples: u32,
     faults: Faults,
     radius: Option<MergeRadius>,
+    radiosity: RadiositySettings,
 }
 
 impl<'a> Render<'a> {
@@ -81,6 +85,7 @@ impl<'a> Render<'a> {
             light_samples: 1,
             faults: Faults::NONE,
             radius: None,
+            radiosity: RadiositySettings::default(),
         }
     }
 
@@ -125,6 +130,36 @@ impl<'a> Render<'a> {
         }
     }
 
+    /// Radiosity's patch size and form-factor rays.
+    pub fn radiosity(self, radiosity: RadiositySettings) -> Self {
+        Render { radiosity, ..self }
+    }
+
+    /// Radiosity's solution on the CPU (the scene's patches at this render's settings, solved
+    /// with its seed and faults).
+    pub fn cpu_solution(&self) -> hexray::cpu::radiosity::Solution {
+        let (_, flat) = self.loaded();
+        self.cpu_solution_of(&flat)
+    }
+
+    /// Radiosity's patch table at this render's settings (as both backends cut it).
+    pub fn cpu_patches(&self) -> Patches {
+        let (_, flat) = self.loaded();
+        Patches::build(&flat, self.radiosity.patch_size).unwrap()
+    }
+
+    fn cpu_solution_of(&self, flat: &FlatScene) -> hexray::cpu::radiosity::Solution {
+        let patches = Patches::build(flat, self.radiosity.patch_size).unwrap();
+        hexray::cpu::radiosity::solve(
+            flat,
+            patches,
+            self.seed,
+            self.radiosity.patch_rays,
+            self.faults,
+        )
+        .0
+    }
+
     fn loaded(&self) -> (std::borrow::Cow<'a, Scene>, FlatScene) {
         match self.source {
             Source::File(rel) => {
@@ -166,6 +201,18 @@ impl<'a> Render<'a> {
                 self.method,
                 self.faults,
                 &mut buffers,
+                &mut film,
+            );
+        } else if self.method == Method::Radiosity {
+            let solution = self.cpu_solution_of(&flat);
+            render_radiosity_pass(
+                &flat,
+                &camera,
+                &solution,
+                self.seed,
+                0,
+                self.spp,
+                self.faults,
                 &mut film,
             );
         } else if self.method == Method::Whitted {
@@ -255,6 +302,7 @@ impl<'a> Render<'a> {
                 b.method = self.method;
                 b.radius = self.radius;
                 b.faults = self.faults;
+                b.radiosity = self.radiosity;
                 Box::new(b)
             }
             Backend::Gpu => Box::new(GpuBackend {
@@ -286,6 +334,7 @@ impl<'a> Render<'a> {
         if let Some(radius) = self.radius {
             r.set_merge_radius(radius);
         }
+        r.set_radiosity(self.radiosity);
         r
     }
 

@@ -47,10 +47,11 @@ impl GpuRenderer {
     }
 
     /// What the method chose or met (`Backend::provenance`): for BDPT its τ and n_c, and the
-    /// iterations traced again after a wave overflowed the light-vertex pool.
+    /// iterations traced again after a wave overflowed the light-vertex pool; for radiosity its
+    /// patches and solve.
     pub fn provenance(&self) -> Vec<(&'static str, String)> {
         let Some(b) = &self.bidirectional else {
-            return Vec::new();
+            return self.radiosity_provenance();
         };
         let mut v = if self.method.connects() {
             crate::film::provenance::bidirectional_provenance(

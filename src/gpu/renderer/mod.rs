@@ -2,6 +2,7 @@
 //! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
 
 mod iterations;
+mod radiosity;
 
 use super::bidirectional::Bidirectional;
 use super::frame::{
@@ -9,6 +10,7 @@ use super::frame::{
 };
 use super::limits::{array_lengths, check_scene_fits, largest_binding, PIXEL_SUMS_BYTES};
 use super::pipeline::{bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload};
+use super::radiosity::{radiosity_layout, Radiosity};
 use super::shader::Residency;
 use crate::film::Film;
 use crate::layout::FlatScene;
@@ -47,6 +49,8 @@ pub struct GpuRenderer {
     pub(super) method: Method,
     /// Light tracing and BDPT: their kernels and buffers.
     pub(super) bidirectional: Option<Bidirectional>,
+    /// Radiosity: its solve kernels and, once solved, its buffers (bind group 1 of its pass).
+    pub(super) radiosity: Option<Radiosity>,
     /// The dispatch size, in camera paths, that should take about TARGET_DISPATCH_SECONDS;
     /// measured and updated after every pass.
     pub(super) paths_per_dispatch: u64,
@@ -187,6 +191,7 @@ impl GpuRenderer {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = compile_kernel(device, scene, checks, residency);
         let layout = bind_group_layout(device, residency);
+        let mut radiosity = None;
         let (pipeline, bidirectional) = if method.splats() {
             let b = Bidirectional::new(
                 device,
@@ -198,6 +203,25 @@ impl GpuRenderer {
                 faults.merge_kernel_ball,
             )?;
             (None, Some(b))
+        } else if method == Method::Radiosity {
+            // The image pass reads the solution through bind group 2, as the solve kernels do.
+            let r = Radiosity::new(
+                device,
+                &module,
+                &layout,
+                radiosity_layout(device),
+                scene,
+                seed,
+                faults,
+            );
+            let pipeline = compute_pipeline(
+                device,
+                &module,
+                &[&layout, &r.empty_layout, &r.layout],
+                "radiosity_pass",
+            );
+            radiosity = Some(r);
+            (Some(pipeline), None)
         } else {
             let entry = match method {
                 Method::Whitted => "whitted_pass",
@@ -249,6 +273,7 @@ impl GpuRenderer {
             frame,
             method,
             bidirectional,
+            radiosity,
             paths_per_dispatch: 1 << 16,
             lost,
             #[cfg(feature = "stage-times")]
@@ -328,6 +353,8 @@ impl GpuRenderer {
     /// One pass of path tracing; false if `stop` cut it short (nothing folded).
     fn pass(&mut self, first: u32, count: u32, film: &mut Film, stop: &AtomicBool) -> Result<bool> {
         self.check_device()?;
+        // Radiosity's solve, once, before its first pass.
+        self.solve_radiosity()?;
         let (w, h) = (self.frame.camera.width, self.frame.camera.height);
         let start = Instant::now();
         let checked = self.stop_checked(w as u64 * h as u64, count);
@@ -420,6 +447,12 @@ impl GpuRenderer {
                 let mut cpass = encoder.begin_compute_pass(&Default::default());
                 cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
                 cpass.set_bind_group(0, &self.bind_group, &[]);
+                if let Some(r) = &self.radiosity {
+                    if let Some(solved) = &r.solved {
+                        cpass.set_bind_group(1, &r.empty_group, &[]);
+                        cpass.set_bind_group(2, &solved.bind_group, &[]);
+                    }
+                }
                 cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
             }
             self.queue.submit([encoder.finish()]);
