@@ -68,20 +68,17 @@ else:
 PY
 }
 
-# name, scene, reference (for the curve; "-" for none), what the picture shows
+# name, scene, reference (for the curve; "-" for none), what the picture shows. The robustness
+# scenes only: the scenes where methods differ (the caustic, the tiny lights 1e0 and 1e2,
+# grazing, the mirror corridor, the thin slab) are the atlas's, every method on both backends
+# (docs/atlas.sh).
 report_list() {
     cat <<'EOF'
-caustic scenes/stability/caustic.json caustic_32.exr
-tiny_light_1e0 scenes/tncg15_room.json tiny_light_1e0_32.exr
-tiny_light_1e2 scenes/stability/tiny_light_1e2.json tiny_light_1e2_32.exr
 tiny_light_1e4 scenes/stability/tiny_light_1e4.json tiny_light_1e4_32.exr
-grazing scenes/stability/grazing.json grazing_32.exr
 far_from_origin_1e3 scenes/stability/tncg15_translated_1e3.json tiny_light_1e0_32.exr
 far_from_origin_1e4 scenes/stability/tncg15_translated_1e4.json tiny_light_1e0_32.exr
 far_from_origin_1e5 scenes/stability/tncg15_translated_1e5.json tiny_light_1e0_32.exr
 far_from_origin_1e6 scenes/stability/tncg15_translated_1e6.json tiny_light_1e0_32.exr
-mirror_corridor scenes/stability/mirror_corridor.json mirror_corridor_32.exr
-thin_slab scenes/stability/thin_slab.json thin_slab_32.exr
 thin_box scenes/stability/thin_box.json -
 mirror_doubled scenes/stability/tncg15_mirror_doubled.json -
 shadow_colour scenes/stability/tncg15_umbra_view.json -
@@ -145,7 +142,10 @@ PY
         echo "How this was measured: \`docs/figures/stability.sh markdown\` (path tracing, CPU, ${size}x${size},"
         echo "against \`$refs/\`)."
         echo
-        echo "## Pictures and curves (path tracing)"
+        echo "## Pictures and curves of the robustness scenes (path tracing)"
+        echo
+        echo "The scenes where methods differ (the caustic, the tiny lights 1e0 and 1e2, grazing, the mirror"
+        echo "corridor, the thin slab) are in the [atlas](atlas.md), every method on both backends."
         echo
         echo "Pictures: 128x128, 64 spp per backend (seed 3). Curves: ${size}x${size} against the long CPU"
         echo "references, 10 s per backend; \"relMSE at 10 s\" is the last doubling wave finished within 10 s."
