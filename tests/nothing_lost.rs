@@ -322,6 +322,42 @@ fn checkpoints_survive_a_kill_without_warning_and_resume() {
     );
 }
 
+/// A render stopped without warning between writing its EXR and its film leaves the pair one
+/// checkpoint apart (the EXR newer); resuming takes the film, which holds the samples, and
+/// goes on (before, the pair was refused as two renders, and the samples were stranded).
+#[test]
+fn a_pair_cut_between_its_writes_resumes_from_the_film() {
+    let dir = temp_dir!("cut-pair");
+    let exr = dir.join("k.exr");
+    ok(&hexray()
+        .args([
+            "render",
+            "scenes/cornell_box.json",
+            "--backend",
+            "cpu",
+            "--method",
+            "path",
+        ])
+        .args([
+            "--spp", "4", "--width", "16", "--height", "16", "-q", "--out",
+        ])
+        .arg(&exr)
+        .output()
+        .unwrap());
+    let film_at_4 = std::fs::read(exr.with_extension("film")).unwrap();
+    ok(&resume(&exr, &["--spp", "6"]));
+    // The EXR of 6 spp beside the film of 4: a kill after the EXR's write, before the film's.
+    std::fs::write(exr.with_extension("film"), film_at_4).unwrap();
+    let o = resume(&exr, &["--spp", "8"]);
+    ok(&o);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("resuming from the film"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(read_exr(&exr).unwrap().1.get("spp"), Some("8"));
+}
+
 crate::common::on_each_backend! {
     /// A stop under way (a vcm iteration at 512x512 takes about a second on 2 cores and on
     /// lavapipe) drops the iteration it finds whole, so the film holds finished iterations only,

@@ -227,15 +227,26 @@ pub(crate) const EXIT_DROPPED: u8 = 3;
 pub(crate) const DROPPED_SHARE_LIMIT: f64 = 0.01;
 
 /// Reads the film of `--resume NAME.exr` and takes the settings it was made with into `args`;
-/// refuses a film whose EXR is from another render.
+/// refuses a film whose EXR is from another render. The sample counts of the two may differ:
+/// a render stopped without warning (SIGKILL, power) between writing its EXR and its film
+/// leaves the pair one checkpoint apart, and the film, which holds the samples, is the truth.
 pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, FilmIdentity)> {
     let path = film_file::film_path(exr);
     let (film, id) = film_file::read(&path)
         .with_context(|| format!("no film to resume beside {}", exr.display()))?;
     if exr.exists() {
         let meta = output::read_exr_metadata(exr)?;
+        if meta.get("spp") != Some(id.spp.to_string().as_str()) {
+            eprintln!(
+                "hexray: note: {} holds {} spp and {} holds {}: resuming from the film (a render \
+                 stopped between writing the two)",
+                exr.display(),
+                meta.get("spp").unwrap_or("no count of"),
+                path.display(),
+                id.spp
+            );
+        }
         let ours = [
-            ("spp", id.spp.to_string()),
             ("seed", id.seed.to_string()),
             ("method", id.method.clone()),
             ("scene_sha1", id.scene_sha1.clone()),
