@@ -212,6 +212,7 @@ run() {
     # Provenance: with ATLAS_KEEP each run adds its line (its methods, commit, date, time).
     put() { if [ -n "${ATLAS_KEEP:-}" ]; then cat >> "$1"; else cat > "$1"; fi; }
     local which=${METHODS:-all methods}
+    git update-index -q --refresh > /dev/null 2>&1 || true  # stale file times are not changes
     echo "$(git describe --always --dirty 2> /dev/null) ($which)" | put "$out/commit.txt"
     echo "$(date -u +%F) ($which)" | put "$out/date.txt"
     local adapter
