@@ -12,11 +12,8 @@
 # start-up and comparison around it, measured on 2 cores (AMD EPYC, lavapipe) at 0.5 s per CPU
 # render and 1.0 s per GPU render (its 1-spp warm-up included: lavapipe compiles a scene's
 # kernels once, then reads them from its disk cache; on a cold cache a warm-up takes up to
-# about 13 s, outside the timed render). So 11 scenes x 9 methods x (4.5 s CPU + 5 s GPU) = 16 min;
-# 12 min with the 7 methods of a binary without photon-map and radiosity (skipped in seconds).
-# Measured: `ONLY='door_ajar\|mirror_caustic\|enclosed_light' ATLAS_BACKENDS=cpu
-# ATLAS_SECONDS=2` (21 renders) 51 s; the other 8 scenes the same way 148 s; the same 3 scenes
-# with ATLAS_BACKENDS=gpu 62 s (81 s with the adapter queries, montage and page).
+# about 13 s, outside the timed render). So 11 scenes x 9 methods x (4.5 s CPU + 5 s GPU) = 16 min.
+# Measured: the whole run from a clean clone, 900 s (15 min 1 s wall clock, 2026-11-29).
 #
 # Knobs (environment): HEXRAY (default target/release/hexray); ATLAS_SECONDS (the time per
 # render); ATLAS_BACKENDS (default "cpu gpu"; gpu is left out when wgpu finds no adapter);
