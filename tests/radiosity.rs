@@ -248,7 +248,8 @@ fn the_reciprocity_check_rejects_uniform_form_factor_rays() {
 }
 
 /// relMSE of a radiosity render of cornell_box (64x64, 64 samples, seed 9) at `patch_size`
-/// against the path-traced reference (Mitsuba, 256x256, averaged over 4x4 blocks), with each
+/// against the committed reference image `tests/data/references/cornell_box_256.npy` (path
+/// traced by Mitsuba 3, 256x256, averaged over 4x4 blocks; accuracy only), with each
 /// pixel's noise (its variance and the reference's) taken out, so that what is left is the
 /// bias: the same seed gives every patch size the same camera and emitter samples.
 fn cornell_bias(patch_size: f32, faults: Faults) -> f64 {
