@@ -121,15 +121,8 @@ pub fn render_whitted_pass_until(
     film: &mut Film,
     stop: &AtomicBool,
 ) -> u64 {
-    render_tiles_until(film, stop, |tile, stats, rays| {
-        for (&(index, x, y), stats) in tile.iter().zip(stats) {
-            for s in first..first + count {
-                let sampler = Sampler::new(seed, index, s);
-                stats.add(whitted::trace_whitted(
-                    scene, camera, x, y, &sampler, faults, rays,
-                ));
-            }
-        }
+    render_samples_until(film, stop, seed, first, count, |x, y, sampler, rays| {
+        whitted::trace_whitted(scene, camera, x, y, sampler, faults, rays)
     })
 }
 
@@ -165,13 +158,26 @@ pub fn render_radiosity_pass_until(
     film: &mut Film,
     stop: &AtomicBool,
 ) -> u64 {
+    render_samples_until(film, stop, seed, first, count, |x, y, sampler, rays| {
+        radiosity::trace_radiosity(scene, camera, solution, x, y, sampler, faults, rays)
+    })
+}
+
+/// Samples `first..first + count` of every pixel, each the radiance `trace(x, y, sampler,
+/// rays)` of one camera sample drawing the pixel's stream, added to `film` tile by tile until
+/// `stop` is set (Whitted's and radiosity's images).
+fn render_samples_until(
+    film: &mut Film,
+    stop: &AtomicBool,
+    seed: u32,
+    first: u32,
+    count: u32,
+    trace: impl Fn(u32, u32, &Sampler, &mut u64) -> glam::Vec3 + Sync,
+) -> u64 {
     render_tiles_until(film, stop, |tile, stats, rays| {
         for (&(index, x, y), stats) in tile.iter().zip(stats) {
             for s in first..first + count {
-                let sampler = Sampler::new(seed, index, s);
-                stats.add(radiosity::trace_radiosity(
-                    scene, camera, solution, x, y, &sampler, faults, rays,
-                ));
+                stats.add(trace(x, y, &Sampler::new(seed, index, s), rays));
             }
         }
     })
