@@ -30,6 +30,7 @@ fn main() {
         spp: 64,
         seed: 1,
         methods: vec![hexray::transport::method::Method::Path],
+        samplers: vec![hexray::math::sampling::SamplerKind::Independent],
         light_samples: 1,
         threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
     };

@@ -343,7 +343,7 @@ fn camera_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_inv
     let pixels = frame.camera.width * frame.camera.height;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
-        let sampler = Sampler(frame.seed, index + k * pixels, frame.first_sample);
+        let sampler = frame_sampler(index + k * pixels, frame.first_sample);
         radiance += trace_camera_path(x, y, n_c, sampler, path, own);
     }
     // BDPT's pixels are each in one wave; a merging iteration's first wave covers all.

@@ -11,16 +11,40 @@ fn is_finite(v: vec3<f32>) -> bool {
     return all(e != vec3<u32>(0x7f800000u));
 }
 
-// Adds n finite samples (their sum and sum of squares) and `dropped` non-finite ones to pixel
-// (x, y)'s sums of the pass. The sums hold the image from row `frame.film_row` on (a film band).
-fn add_to_pixel(x: u32, y: u32, sum: vec3<f32>, sum_sq: vec3<f32>, n: f32, dropped: f32) {
+// Adds sample `s` of a pixel, its radiance l, to the pixel's sums of the pass: a non-finite
+// sample is counted and dropped, never accumulated (`PixelStats::add`).
+fn add_sample(sums: ptr<function, PixelSums>, s: u32, l: vec3<f32>) {
+    if is_finite(l) {
+        (*sums).sum += l;
+        (*sums).sum_sq += l * l;
+        (*sums).n += 1.0;
+        if (s & 1u) == 0u {
+            (*sums).even_sum += l;
+            (*sums).even_n += 1.0;
+        }
+    } else {
+        (*sums).dropped += 1.0;
+    }
+}
+
+// Adds the sums `taken` by an invocation for pixel (x, y) to the pixel's sums of the pass. The
+// sums hold the image from row `frame.film_row` on (a film band).
+fn add_to_pixel(x: u32, y: u32, taken: PixelSums) {
     let index = band_index(y * frame.camera.width + x);
     var sums = pixel_sums[index];
-    sums.sum += sum;
-    sums.sum_sq += sum_sq;
-    sums.n += n;
-    sums.dropped += dropped;
+    sums.sum += taken.sum;
+    sums.sum_sq += taken.sum_sq;
+    sums.n += taken.n;
+    sums.dropped += taken.dropped;
+    sums.even_sum += taken.even_sum;
+    sums.even_n += taken.even_n;
     pixel_sums[index] = sums;
+}
+
+// The sampler of sample `sample` of `pixel` (or light subpath `pixel`): the frame's seed and
+// sampler.
+fn frame_sampler(pixel: u32, sample: u32) -> Sampler {
+    return Sampler(frame.seed, pixel, sample, frame.sampler);
 }
 
 // Whether image row y is in the film band.
@@ -58,11 +82,15 @@ fn resolve_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         }
         if !overflowed {
             // A non-finite sample, or an overflowed splat sum, is counted and dropped.
-            if is_finite(l) && splat.ok {
-                add_to_pixel(x, y, l, l * l, 1.0, 0.0);
-                value = l;
+            var sums = PixelSums();
+            if splat.ok {
+                add_sample(&sums, frame.first_sample, l);
             } else {
-                add_to_pixel(x, y, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 1.0);
+                sums.dropped = 1.0;
+            }
+            add_to_pixel(x, y, sums);
+            if sums.n > 0.0 {
+                value = l;
             }
         }
     }

@@ -233,5 +233,5 @@ fn light_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let path = frame.path_origin + gid.x;
-    trace_light_path(Sampler(frame.seed, path, frame.first_sample), path);
+    trace_light_path(frame_sampler(path, frame.first_sample), path);
 }

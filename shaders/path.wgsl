@@ -153,10 +153,7 @@ fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = frame.tile_origin.x + gid.x;
     let y = frame.tile_origin.y + gid.y;
     let index = y * frame.camera.width + x;
-    var sum = vec3<f32>(0.0);
-    var sum_sq = vec3<f32>(0.0);
-    var n = 0.0;
-    var dropped = 0.0;
+    var sums = PixelSums();
     // Path regeneration (Novák et al., "GPU Computing: Interactive Path Tracing with Path
     // Regeneration", 2010): the lanes of a group run in lockstep, so a loop of samples around
     // a loop of bounces keeps every lane until the group's longest path of each sample ends.
@@ -166,27 +163,19 @@ fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     // the same path as before (its own streams) and is added in sample order.
     let end = frame.first_sample + frame.sample_count;
     var s = frame.first_sample;
-    var sampler = Sampler(frame.seed, index, s);
+    var sampler = frame_sampler(index, s);
     var path = start_path(x, y, sampler);
     loop {
         if path_bounce(&path, sampler) {
             continue;
         }
-        let l = finish_path(path);
-        // A non-finite sample is counted and dropped, never accumulated.
-        if is_finite(l) {
-            sum += l;
-            sum_sq += l * l;
-            n += 1.0;
-        } else {
-            dropped += 1.0;
-        }
+        add_sample(&sums, s, finish_path(path));
         s += 1u;
         if s >= end {
             break;
         }
-        sampler = Sampler(frame.seed, index, s);
+        sampler = frame_sampler(index, s);
         path = start_path(x, y, sampler);
     }
-    add_to_pixel(x, y, sum, sum_sq, n, dropped);
+    add_to_pixel(x, y, sums);
 }

@@ -165,7 +165,7 @@ fn photon_map_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local
     let pixels = frame.camera.width * frame.camera.height;
     var radiance = vec3<f32>(0.0);
     for (var k = 0u; k < u32(n_c); k++) {
-        let sampler = Sampler(frame.seed, index + k * pixels, frame.first_sample);
+        let sampler = frame_sampler(index + k * pixels, frame.first_sample);
         radiance += trace_photon_map_path(x, y, sampler, own);
     }
     var before = vec3<f32>(0.0);

@@ -191,7 +191,7 @@ fn form_factor_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
     let weight = radiosity_params.form_factor_scale / f32(radiosity_params.rays_per_patch);
     let row = i * n_patches;
     for (var r = radiosity_params.first_ray; r < radiosity_params.first_ray + radiosity_params.ray_count; r++) {
-        let u = draw4(Sampler(radiosity_params.seed, i, r), DIM_FORM_FACTOR);
+        let u = draw4(Sampler(radiosity_params.seed, i, r, SAMPLER_INDEPENDENT), DIM_FORM_FACTOR);
         let pp = patch_point(pt, u.x, u.y);
         var local: vec3<f32>;
         if radiosity_params.uniform_directions != 0u {
@@ -359,20 +359,9 @@ fn radiosity_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = frame.tile_origin.x + gid.x;
     let y = frame.tile_origin.y + gid.y;
     let index = y * frame.camera.width + x;
-    var sum = vec3<f32>(0.0);
-    var sum_sq = vec3<f32>(0.0);
-    var n = 0.0;
-    var dropped = 0.0;
+    var sums = PixelSums();
     for (var s = frame.first_sample; s < frame.first_sample + frame.sample_count; s++) {
-        let l = trace_radiosity(x, y, Sampler(frame.seed, index, s));
-        // A non-finite sample is counted and dropped, never accumulated.
-        if is_finite(l) {
-            sum += l;
-            sum_sq += l * l;
-            n += 1.0;
-        } else {
-            dropped += 1.0;
-        }
+        add_sample(&sums, s, trace_radiosity(x, y, frame_sampler(index, s)));
     }
-    add_to_pixel(x, y, sum, sum_sq, n, dropped);
+    add_to_pixel(x, y, sums);
 }

@@ -1,6 +1,7 @@
 // Random numbers and warps: `src/math/sampling.rs`, line for line.
-// Every random number is pcg4d(pixel, sample, dimension block, seed) (Jarzynski and Olano 2020),
-// integer operations only, so the CPU and the GPU draw the same bits.
+// Every block of four random numbers is pcg4d(pixel, sample, dimension block, seed) (Jarzynski and
+// Olano 2020) or a 4-D Owen-scrambled Sobol point keyed by the same (Burley 2020), integer
+// operations only, so the CPU and the GPU draw the same bits.
 
 fn pcg4d(v_in: vec4<u32>) -> vec4<u32> {
     var v = v_in * 1664525u + 1013904223u;
@@ -66,14 +67,83 @@ fn dim_splat(bounce: u32) -> u32 {
     return 0x50000000u + bounce;
 }
 
+// How a stream's numbers are drawn (`SamplerKind` in src/math/sampling.rs, `frame.sampler`).
+const SAMPLER_INDEPENDENT: u32 = 0u;
+const SAMPLER_SOBOL: u32 = 1u;
+
+// The independent randomisations a pixel's Sobol samples are split into (`SOBOL_STREAMS`).
+const SOBOL_STREAMS: u32 = 2u;
+// Bits of a point's index within one randomisation (`SOBOL_BITS`).
+const SOBOL_BITS: u32 = 16u;
+// Keeps the Sobol scrambles' hash inputs apart from the independent sampler's (`SOBOL_KEY`).
+const SOBOL_KEY: u32 = 0x50B01000u;
+
+// `sobol4_reversed` in src/math/sampling.rs: the xor of the reversed direction numbers of the
+// first four Sobol dimensions (`SOBOL_DIRECTIONS`, one line per bit k of the index, which is
+// bit 31 - k of index_reversed; tests/sampler.rs checks the numbers are the same).
+fn sobol4_reversed(index_reversed: u32) -> vec4<u32> {
+    var x = vec4<u32>(0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000001u, 0x00000001u, 0x00000001u, 0x00000001u), (index_reversed & 0x80000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000002u, 0x00000003u, 0x00000003u, 0x00000003u), (index_reversed & 0x40000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000004u, 0x00000005u, 0x00000006u, 0x00000004u), (index_reversed & 0x20000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000008u, 0x0000000fu, 0x00000009u, 0x0000000au), (index_reversed & 0x10000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000010u, 0x00000011u, 0x00000017u, 0x0000001fu), (index_reversed & 0x08000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000020u, 0x00000033u, 0x0000003au, 0x0000002eu), (index_reversed & 0x04000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000040u, 0x00000055u, 0x00000071u, 0x00000045u), (index_reversed & 0x02000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000080u, 0x000000ffu, 0x000000a3u, 0x000000c9u), (index_reversed & 0x01000000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000100u, 0x00000101u, 0x00000116u, 0x0000011bu), (index_reversed & 0x00800000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000200u, 0x00000303u, 0x00000339u, 0x000002a4u), (index_reversed & 0x00400000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000400u, 0x00000505u, 0x00000677u, 0x0000079au), (index_reversed & 0x00200000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00000800u, 0x00000f0fu, 0x000009aau, 0x00000b67u), (index_reversed & 0x00100000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00001000u, 0x00001111u, 0x00001601u, 0x0000101eu), (index_reversed & 0x00080000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00002000u, 0x00003333u, 0x00003903u, 0x0000302du), (index_reversed & 0x00040000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00004000u, 0x00005555u, 0x00007706u, 0x00004041u), (index_reversed & 0x00020000u) != 0u);
+    x ^= select(vec4<u32>(0u), vec4<u32>(0x00008000u, 0x0000ffffu, 0x0000aa09u, 0x0000a0c3u), (index_reversed & 0x00010000u) != 0u);
+    return x;
+}
+
+// Owen scrambling in base 2 of bit-reversed values, each keyed by its seed (`owen_reversed`).
+fn owen_reversed(x_in: vec4<u32>, seed: vec4<u32>) -> vec4<u32> {
+    var x = x_in;
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> vec4<u32>(16u)) | vec4<u32>(1u);
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return x;
+}
+
+// Block `dim` of sample `sample` of `pixel` under the Sobol sampler, as 32-bit fractions
+// (`sobol_draw4_bits`; Burley 2020, section 4: a shuffled, scrambled 4-D Sobol point).
+fn sobol_draw4_bits(seed: u32, pixel: u32, sample: u32, dim: u32) -> vec4<u32> {
+    // Step 1 - the stream, the randomisation and the point in it.
+    let stream = sample % SOBOL_STREAMS;
+    let point = sample / SOBOL_STREAMS;
+    let randomisation = (point >> SOBOL_BITS) * SOBOL_STREAMS + stream;
+    // Step 2 - the seeds.
+    let shuffle = pcg4d(vec4<u32>(pixel, randomisation ^ SOBOL_KEY, dim, seed));
+    let scramble = pcg4d(shuffle);
+    // Step 3 - the shuffle, in the reversed domain: the index's 16 bits are the top 16.
+    let index_reversed = owen_reversed(vec4<u32>(reverseBits(point)), shuffle).x & 0xffff0000u;
+    // Step 4 - the scrambled point.
+    return reverseBits(owen_reversed(sobol4_reversed(index_reversed), scramble));
+}
+
 struct Sampler {
     seed: u32,
     pixel: u32,
     sample: u32,
+    // SAMPLER_INDEPENDENT or SAMPLER_SOBOL.
+    kind: u32,
 }
 
 fn draw4(s: Sampler, dim: u32) -> vec4<f32> {
-    let h = pcg4d(vec4<u32>(s.pixel, s.sample, dim, s.seed));
+    var h: vec4<u32>;
+    if s.kind == SAMPLER_SOBOL {
+        h = sobol_draw4_bits(s.seed, s.pixel, s.sample, dim);
+    } else {
+        h = pcg4d(vec4<u32>(s.pixel, s.sample, dim, s.seed));
+    }
     return vec4<f32>(u32_to_unit_f32(h.x), u32_to_unit_f32(h.y), u32_to_unit_f32(h.z), u32_to_unit_f32(h.w));
 }
 

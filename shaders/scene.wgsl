@@ -141,6 +141,12 @@ struct Frame {
     // The view's reach: a camera vertex this far from the eye or farther merges within
     // merge_radius, a nearer one within its share (`merging::footprint_share`; 0: all within it).
     merge_reach: f32,
+    // SAMPLER_INDEPENDENT or SAMPLER_SOBOL (`--sampler`, sampling.wgsl).
+    sampler: u32,
+    // To the 16-byte boundary of planar_mirrors.
+    pad2: u32,
+    pad3: u32,
+    pad4: u32,
     // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
 }
@@ -161,6 +167,9 @@ struct PixelSums {
     n: f32,
     sum_sq: vec3<f32>,
     dropped: f32,
+    // The finite samples of even index: their sum and count (`PixelStats::even_sum`).
+    even_sum: vec3<f32>,
+    even_n: f32,
 }
 
 const KIND_DIFFUSE: u32 = 0u;

@@ -107,20 +107,9 @@ fn whitted_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = frame.tile_origin.x + gid.x;
     let y = frame.tile_origin.y + gid.y;
     let index = y * frame.camera.width + x;
-    var sum = vec3<f32>(0.0);
-    var sum_sq = vec3<f32>(0.0);
-    var n = 0.0;
-    var dropped = 0.0;
+    var sums = PixelSums();
     for (var s = frame.first_sample; s < frame.first_sample + frame.sample_count; s++) {
-        let l = trace_whitted(x, y, Sampler(frame.seed, index, s));
-        // A non-finite sample is counted and dropped, never accumulated.
-        if is_finite(l) {
-            sum += l;
-            sum_sq += l * l;
-            n += 1.0;
-        } else {
-            dropped += 1.0;
-        }
+        add_sample(&sums, s, trace_whitted(x, y, frame_sampler(index, s)));
     }
-    add_to_pixel(x, y, sum, sum_sq, n, dropped);
+    add_to_pixel(x, y, sums);
 }

@@ -5,14 +5,19 @@
 
 use crate::common::*;
 use hexray::film::Film;
+use hexray::math::sampling::SamplerKind;
 use hexray::render::{Backend, CpuBackend};
 use hexray::transport::camera::Camera;
 
 fn render(threads: usize, seed: u32, passes: &[u32]) -> Film {
+    render_with(SamplerKind::Independent, threads, seed, passes)
+}
+
+fn render_with(sampler: SamplerKind, threads: usize, seed: u32, passes: &[u32]) -> Film {
     let (scene, flat) = load("scenes/glass_room.json");
     let camera = Camera::new(&scene.desc.camera, 48, 32);
     let mut backend = CpuBackend::new(&flat, camera, seed, threads).unwrap();
-    let mut film = Film::new(48, 32);
+    let mut film = Film::new(48, 32).with_sampler(sampler);
     let mut first = 0;
     for &count in passes {
         backend.pass(first, count, &mut film).unwrap();
@@ -28,11 +33,18 @@ fn same_seed_is_bit_identical_at_1_and_2_threads() {
     assert!(a.pixels == b.pixels, "1 and 2 threads differ");
 }
 
+/// With either sampler (the Sobol sampler's even-sample sums included, which follow each
+/// sample's index).
 #[test]
 fn same_seed_is_bit_identical_for_any_split_into_passes() {
-    let a = render(2, 5, &[8]);
-    let b = render(2, 5, &[1, 2, 5]);
-    assert!(a.pixels == b.pixels, "one pass and three passes differ");
+    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        let a = render_with(sampler, 2, 5, &[8]);
+        let b = render_with(sampler, 2, 5, &[1, 2, 5]);
+        assert!(
+            a.pixels == b.pixels,
+            "{sampler}: one pass and three passes differ"
+        );
+    }
 }
 
 #[test]

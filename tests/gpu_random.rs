@@ -1,10 +1,11 @@
 //! The GPU draws the very same random numbers as the CPU: a tiny kernel made of
 //! `shaders/sampling.wgsl` and a probe entry point writes the raw bits of `draw4` for a grid of
-//! (pixel, sample, dimension) keys, and they must equal `Sampler::draw4` bit for bit.
+//! (pixel, sample, dimension) keys, and they must equal `Sampler::draw4` bit for bit, for each
+//! sampler.
 
 use crate::common::gpu;
 use hexray::gpu::shader::validate;
-use hexray::math::sampling::Sampler;
+use hexray::math::sampling::{Sampler, SamplerKind};
 use wgpu::util::DeviceExt;
 
 const PROBE: &str = r#"
@@ -14,18 +15,28 @@ const PROBE: &str = r#"
 fn probe(@builtin(global_invocation_id) g: vec3<u32>) {
     let i = g.x;
     // 16 pixels x 8 samples x 8 dimension blocks, seed 12345; pixels and samples spread out so
-    // large keys are covered too.
+    // large keys are covered too (past 2^17 samples: a Sobol stream's second randomisation).
     let pixel = (i % 16u) * 40503u;
-    let sample = ((i / 16u) % 8u) * 9973u;
+    let sample = ((i / 16u) % 8u) * 29989u;
     let dim = i / 128u;
-    out[i] = bitcast<vec4<u32>>(draw4(Sampler(12345u, pixel, sample), dim));
+    out[i] = bitcast<vec4<u32>>(draw4(Sampler(12345u, pixel, sample, KIND), dim));
 }
 "#;
 
 #[test]
 fn gpu_random_streams_equal_the_cpu_bit_for_bit() {
+    for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
+        streams_equal(kind);
+    }
+}
+
+fn streams_equal(kind: SamplerKind) {
     let Some(gpu) = gpu() else { return };
-    let source = format!("{}\n{PROBE}", include_str!("../shaders/sampling.wgsl"));
+    let source = format!(
+        "{}\nconst KIND: u32 = {}u;\n{PROBE}",
+        include_str!("../shaders/sampling.wgsl"),
+        kind.code()
+    );
     validate(&source).unwrap();
     let n = 16 * 8 * 8u32;
     let (device, queue) = (&gpu.device, &gpu.queue);
@@ -75,13 +86,13 @@ fn gpu_random_streams_equal_the_cpu_bit_for_bit() {
     let bytes = read.slice(..).get_mapped_range().unwrap().to_vec();
     let got: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
     for i in 0..n {
-        let (pixel, sample, dim) = ((i % 16) * 40503, ((i / 16) % 8) * 9973, i / 128);
-        let want = Sampler::new(12345, pixel, sample)
+        let (pixel, sample, dim) = ((i % 16) * 40503, ((i / 16) % 8) * 29989, i / 128);
+        let want = Sampler::of(kind, 12345, pixel, sample)
             .draw4(dim)
             .map(f32::to_bits);
         assert_eq!(
             got[i as usize], want,
-            "pixel {pixel} sample {sample} dim {dim}"
+            "{kind}: pixel {pixel} sample {sample} dim {dim}"
         );
     }
 }

@@ -127,6 +127,10 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             merges_within_clearance,
             clearance_floor,
             merge_reach,
+            sampler,
+            pad2,
+            pad3,
+            pad4,
             planar_mirrors
         }),
         rust_layout!(PlanarMirror {
@@ -163,7 +167,9 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             sum,
             n,
             sum_sq,
-            dropped
+            dropped,
+            even_sum,
+            even_n
         }),
         rust_layout!(PatchGrid { first, n, m, sides }),
         rust_layout!(Patch {

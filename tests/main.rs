@@ -40,6 +40,7 @@ mod photon_merging;
 mod precision;
 mod radiosity;
 mod reintersect;
+mod sampler;
 mod scene_parser;
 mod shaders;
 mod stability_caustic;

@@ -21,7 +21,7 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// The χ² statistic of k image means (red channel) against their mean claimed variance, and
 /// whether it lies within the two-sided 99 % interval.
-fn chi_square_of_scatter(what: &str, means_and_claims: &[(f64, f64)]) -> (f64, bool) {
+pub(crate) fn chi_square_of_scatter(what: &str, means_and_claims: &[(f64, f64)]) -> (f64, bool) {
     let n = means_and_claims.len() as f64;
     let mean = means_and_claims.iter().map(|m| m.0).sum::<f64>() / n;
     let s2 = means_and_claims

@@ -11,6 +11,7 @@
 
 use crate::common::*;
 use hexray::film::Film;
+use hexray::math::sampling::SamplerKind;
 use hexray::transport::method::Method;
 
 const SCENE: &str = "scenes/cornell_box.json";
@@ -35,22 +36,35 @@ fn reached(film: &Film, reference: &Film) -> f64 {
 /// Renders that the test averages over.
 const SEEDS: u32 = 12;
 
+/// The mean share of the target that renders of seeds 1 to [`SEEDS`] with `sampler` reached.
+fn mean_share_reached(backend: Backend, sampler: SamplerKind) -> f64 {
+    let reference = reference();
+    let mut shares = Vec::new();
+    for seed in 1..=SEEDS {
+        let film = Render::file(SCENE)
+            .size(SIZE, SIZE)
+            .spp(100_000)
+            .seed(seed)
+            .method(Method::Path)
+            .sampler(sampler)
+            .until_error_target(backend, TARGET);
+        shares.push(reached(&film, &reference) / TARGET);
+    }
+    let mean = shares.iter().sum::<f64>() / shares.len() as f64;
+    eprintln!("{backend} {sampler}: relMSE over the target, seeds 1 to {SEEDS}: mean {mean:.3}, each {shares:.2?}");
+    mean
+}
+
 on_each_backend! {
     /// Path tracing stops at the target, and is there.
     fn a_render_to_an_error_target_reaches_that_relmse(backend) {
-        let reference = reference();
-        let mut shares = Vec::new();
-        for seed in 1..=SEEDS {
-            let film = Render::file(SCENE)
-                .size(SIZE, SIZE)
-                .spp(100_000)
-                .seed(seed)
-                .method(Method::Path)
-                .until_error_target(backend, TARGET);
-            shares.push(reached(&film, &reference) / TARGET);
-        }
-        let mean = shares.iter().sum::<f64>() / shares.len() as f64;
-        eprintln!("{backend}: relMSE over the target, seeds 1 to {SEEDS}: mean {mean:.3}, each {shares:.2?}");
+        let mean = mean_share_reached(backend, SamplerKind::Independent);
+        assert!((mean - 1.0).abs() <= 0.25, "{backend}: relMSE {mean:.3} of the target");
+    }
+
+    /// With the Sobol sampler too, whose estimate comes from each pixel's two streams.
+    fn a_sobol_render_to_an_error_target_reaches_that_relmse(backend) {
+        let mean = mean_share_reached(backend, SamplerKind::Sobol);
         assert!((mean - 1.0).abs() <= 0.25, "{backend}: relMSE {mean:.3} of the target");
     }
 }

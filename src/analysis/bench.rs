@@ -12,6 +12,7 @@ use crate::cpu::shadow_probe::shadow_threshold_for;
 use crate::film::Film;
 use crate::gpu::{Checks, Gpu, GpuRenderer, Residency};
 use crate::layout::FlatScene;
+use crate::math::sampling::SamplerKind;
 use crate::render::{Backend, CpuBackend};
 use crate::scene::Scene;
 use crate::transport::camera::Camera;
@@ -41,6 +42,8 @@ pub struct Config {
     pub seed: u32,
     /// The methods to time, each on every scene and backend.
     pub methods: Vec<Method>,
+    /// The samplers to time, each on every scene, method and backend (`--sampler`).
+    pub samplers: Vec<SamplerKind>,
     pub light_samples: u32,
     pub threads: usize,
 }
@@ -54,6 +57,7 @@ pub struct Row {
     pub backend: Which,
     #[serde(serialize_with = "method_name")]
     pub method: Method,
+    pub sampler: SamplerKind,
     pub device: String,
     pub width: u32,
     pub height: u32,
@@ -114,31 +118,34 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
                 backend.pass(0, 1, &mut Film::new(config.width, config.height))?;
                 let warmup_seconds = warm.elapsed().as_secs_f64();
 
-                let mut film = Film::new(config.width, config.height);
-                let start = Instant::now();
-                backend.pass(0, config.spp, &mut film)?;
-                let seconds = start.elapsed().as_secs_f64();
-                let row = Row {
-                    scene: scene.desc.name.clone(),
-                    triangles: flat.triangles.len(),
-                    spheres: flat.spheres.len(),
-                    backend: which,
-                    method,
-                    device: backend.device(),
-                    width: config.width,
-                    height: config.height,
-                    spp: config.spp,
-                    light_samples: config.light_samples,
-                    seconds,
-                    camera_paths_per_second: paths(config.spp) / seconds,
-                    rays_per_path,
-                    rays_per_second: rays_per_path * paths(config.spp) / seconds,
-                    compile_seconds,
-                    warmup_seconds,
-                    image_mean: film.image_mean().0,
-                };
-                on_row(&row);
-                rows.push(row);
+                for &sampler in &config.samplers {
+                    let mut film = Film::new(config.width, config.height).with_sampler(sampler);
+                    let start = Instant::now();
+                    backend.pass(0, config.spp, &mut film)?;
+                    let seconds = start.elapsed().as_secs_f64();
+                    let row = Row {
+                        scene: scene.desc.name.clone(),
+                        triangles: flat.triangles.len(),
+                        spheres: flat.spheres.len(),
+                        backend: which,
+                        method,
+                        sampler,
+                        device: backend.device(),
+                        width: config.width,
+                        height: config.height,
+                        spp: config.spp,
+                        light_samples: config.light_samples,
+                        seconds,
+                        camera_paths_per_second: paths(config.spp) / seconds,
+                        rays_per_path,
+                        rays_per_second: rays_per_path * paths(config.spp) / seconds,
+                        compile_seconds,
+                        warmup_seconds,
+                        image_mean: film.image_mean().0,
+                    };
+                    on_row(&row);
+                    rows.push(row);
+                }
             }
         }
     }
@@ -239,13 +246,14 @@ pub fn utc_date() -> String {
 /// The rows as an aligned text table.
 pub fn table(report: &Report) -> String {
     let mut s = format!(
-        "hexray {} bench, {}, {}\n{:<16} {:<4} {:<6} {:>9} {:>5} {:>9} {:>11} {:>9} {:>10} {:>9} {:>9}  device\n",
+        "hexray {} bench, {}, {}\n{:<16} {:<4} {:<6} {:<11} {:>9} {:>5} {:>9} {:>11} {:>9} {:>10} {:>9} {:>9}  device\n",
         report.hexray_version,
         report.machine,
         report.date_utc,
         "scene",
         "be",
         "method",
+        "sampler",
         "size",
         "spp",
         "seconds",
@@ -257,13 +265,14 @@ pub fn table(report: &Report) -> String {
     );
     for r in &report.rows {
         s += &format!(
-            "{:<16} {:<4} {:<6} {:>9} {:>5} {:>9.3} {:>11.3} {:>9.2} {:>10.3} {:>9.3} {:>9.3}  {}\n",
+            "{:<16} {:<4} {:<6} {:<11} {:>9} {:>5} {:>9.3} {:>11.3} {:>9.2} {:>10.3} {:>9.3} {:>9.3}  {}\n",
             r.scene,
             match r.backend {
                 Which::Cpu => "cpu",
                 Which::Gpu => "gpu",
             },
             r.method.name(),
+            r.sampler.name(),
             format!("{}x{}", r.width, r.height),
             r.spp,
             r.seconds,

@@ -6,6 +6,7 @@
 use crate::analysis::compare::{compare, Comparison};
 use crate::film::output::RgbImage;
 use crate::film::Film;
+use crate::math::sampling::SamplerKind;
 use crate::render::Backend;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -25,12 +26,14 @@ pub struct Point {
     pub relmse: f64,
 }
 
-/// Runs waves of doubling spp on `backend` until `budget` seconds of render time are spent (the
-/// wave that crosses it finishes; a wave predicted to end past twice the budget is not started),
-/// calling `on_point` after each.
+/// Runs waves of doubling spp on `backend`, drawing with `sampler`, until `budget` seconds of
+/// render time are spent (the wave that crosses it finishes; a wave predicted to end past twice
+/// the budget is not started), calling `on_point` after each.
+#[allow(clippy::too_many_arguments)]
 pub fn measure(
     scene: &str,
     backend: &mut dyn Backend,
+    sampler: SamplerKind,
     width: u32,
     height: u32,
     reference: &RgbImage,
@@ -50,7 +53,7 @@ pub fn measure(
     backend.pass(0, 1, &mut Film::new(width, height))?;
     let warmup = warm.elapsed().as_secs_f64();
 
-    let mut film = Film::new(width, height);
+    let mut film = Film::new(width, height).with_sampler(sampler);
     let (mut points, mut elapsed, mut done, mut last_wave) = (Vec::new(), 0.0, 0u32, 0.0);
     let mut target = 1u32;
     while elapsed < budget && elapsed + 2.0 * last_wave <= 2.0 * budget {

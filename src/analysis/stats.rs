@@ -26,7 +26,7 @@ impl MeanImage {
             width: film.width as usize,
             height: film.height as usize,
             mean: film.pixels.iter().map(|p| p.mean()).collect(),
-            var: film.pixels.iter().map(|p| p.var_of_mean()).collect(),
+            var: film.pixels.iter().map(|p| film.var_of_mean(p)).collect(),
             n: film.spp() as f64,
             mean_se: film.iteration_means.as_ref().map(|_| film.image_mean().1),
         }

@@ -4,6 +4,7 @@ use super::*;
 use anyhow::Result;
 use clap::Args;
 use hexray::film::output;
+use hexray::math::sampling::SamplerKind;
 use hexray::scene::Scene;
 use hexray::transport::method::Method;
 use std::path::PathBuf;
@@ -37,6 +38,10 @@ pub(crate) struct BenchArgs {
     /// every scene and backend.
     #[arg(long, value_delimiter = ',', default_values_t = [Method::Path])]
     pub(crate) method: Vec<Method>,
+    /// Samplers, comma-separated (independent, sobol): a row for each on every scene, method
+    /// and backend, one after the other.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [SamplerKind::Independent])]
+    pub(crate) sampler: Vec<SamplerKind>,
     /// Shadow rays per diffuse vertex (path tracing).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::math::sampling::MAX_LIGHT_SAMPLES as i64))]
     pub(crate) light_samples: u32,
@@ -94,6 +99,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
         spp: args.spp,
         seed: args.seed,
         methods: args.method.clone(),
+        samplers: args.sampler.clone(),
         light_samples: args.light_samples,
         threads: args.threads.map_or_else(
             || std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -102,9 +108,10 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<ExitCode> {
     };
     let report = bench::run(&config, gpu.as_ref(), |row| {
         eprintln!(
-            "{} with {} on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
+            "{} with {} ({} sampler) on {}: {:.3} M camera paths/s ({:.2} s for {} spp; warm-up {:.2} s apart)",
             row.scene,
             row.method,
+            row.sampler,
             row.device,
             row.camera_paths_per_second / 1e6,
             row.seconds,

@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use hexray::film::output;
 use hexray::layout::FlatScene;
+use hexray::math::sampling::SamplerKind;
 use hexray::scene::Scene;
 use hexray::transport::camera::Camera;
 use hexray::transport::method::Method;
@@ -35,6 +36,9 @@ pub(crate) struct CurveArgs {
     /// per value.
     #[arg(long, value_delimiter = ',', default_values_t = [1u32])]
     pub(crate) light_samples: Vec<u32>,
+    /// Samplers, comma-separated (independent, sobol): one series per value.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [SamplerKind::Independent])]
+    pub(crate) sampler: Vec<SamplerKind>,
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u32,
     /// CPU threads (default: all cores).
@@ -127,7 +131,10 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
             } else {
                 &[1]
             };
-            for &n in counts {
+            for (&n, &sampler) in counts
+                .iter()
+                .flat_map(|n| args.sampler.iter().map(move |s| (n, s)))
+            {
                 let which = match b {
                     BenchBackend::Cpu => Which::Cpu,
                     BenchBackend::Gpu => Which::Gpu,
@@ -154,6 +161,7 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
                 let (mut series, warmup) = hexray::analysis::curve::measure(
                     &scene.desc.name,
                     backend.as_mut(),
+                    sampler,
                     w,
                     h,
                     &reference,
@@ -172,6 +180,9 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
                 for p in &mut series {
                     if args.method.len() > 1 {
                         p.backend = format!("{} {method}", p.backend);
+                    }
+                    if args.sampler.len() > 1 {
+                        p.backend = format!("{}, {sampler}", p.backend);
                     }
                     if args.light_samples.len() > 1 && method == Method::Path {
                         p.backend = format!(

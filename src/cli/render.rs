@@ -11,6 +11,7 @@ use hexray::film::Film;
 use hexray::gpu;
 use hexray::interrupt::StopRequest;
 use hexray::layout::FlatScene;
+use hexray::math::sampling::SamplerKind;
 use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
 use hexray::scene::Scene;
 use hexray::transport::camera::Camera;
@@ -110,6 +111,13 @@ pub(crate) struct RenderArgs {
     /// Seed of the random streams; renders with different seeds are independent.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u32,
+    /// How the random numbers are drawn. independent: a hash per number. sobol: Owen-scrambled
+    /// Sobol points (Burley 2020), each pixel's samples two independent randomisations whose
+    /// difference gives the standard errors; fewer samples for the same error where the first
+    /// bounces' light dominates (docs/sampling.md). Every method; the same points on both
+    /// backends.
+    #[arg(long, value_enum, default_value_t = SamplerKind::Independent)]
+    pub(crate) sampler: SamplerKind,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub(crate) width: u32,
@@ -131,7 +139,7 @@ pub(crate) struct RenderArgs {
     /// seed, method, size and radius. The new samples continue the random streams, so on the
     /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
     /// unless --out says otherwise.
-    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "width", "height", "method", "radius", "alpha", "light_samples", "patch_size", "patch_rays"])]
+    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "sampler", "width", "height", "method", "radius", "alpha", "light_samples", "patch_size", "patch_rays"])]
     pub(crate) resume: Option<PathBuf>,
     /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
     /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
@@ -264,6 +272,7 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
         }
     }
     args.seed = id.seed;
+    args.sampler = id.sampler;
     args.width = id.width;
     args.height = id.height;
     args.method = Some(
@@ -393,7 +402,7 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     };
     let mut film = match resumed {
         Some((film, _)) => film,
-        None => Film::new(args.width, args.height),
+        None => Film::new(args.width, args.height).with_sampler(args.sampler),
     };
     let report = render_with_checkpoints(backend.as_mut(), &mut film, budget, stop, &record, &out);
 
@@ -777,6 +786,7 @@ impl Record<'_> {
         let mut meta = Metadata::default();
         meta.set("spp", film.spp());
         meta.set("seed", args.seed);
+        meta.set("sampler", args.sampler);
         meta.set("light_samples", args.light_samples);
         meta.set("method", method);
         meta.set("backend", self.backend);
@@ -808,6 +818,7 @@ impl Record<'_> {
             height: args.height,
             spp: film.spp(),
             seed: args.seed,
+            sampler: args.sampler,
             method: method.to_string(),
             light_samples: args.light_samples,
             merge_radius: merges.then_some(self.radius.initial),

@@ -17,7 +17,7 @@ pub use path::trace_path;
 use crate::accel::hash_grid::{entry_index, HashGrid};
 use crate::film::{Film, PixelStats};
 use crate::layout::FlatScene;
-use crate::math::sampling::Sampler;
+use crate::math::sampling::{Sampler, SamplerKind};
 use crate::transport::camera::Camera;
 use crate::transport::merging::{kernel_normalization, MergeRadius};
 use crate::transport::method::Method;
@@ -78,11 +78,13 @@ pub fn render_pass_until(
     stop: &AtomicBool,
 ) -> u64 {
     // The tile's pixels, their paths traced together (`path_wavefront::trace_pixels`).
+    let kind = film.sampler;
     render_tiles_until(film, stop, |tile, stats, rays| {
         path_wavefront::trace_pixels(
             scene,
             camera,
             tile,
+            kind,
             seed,
             first,
             count,
@@ -174,10 +176,11 @@ fn render_samples_until(
     count: u32,
     trace: impl Fn(u32, u32, &Sampler, &mut u64) -> glam::Vec3 + Sync,
 ) -> u64 {
+    let kind = film.sampler;
     render_tiles_until(film, stop, |tile, stats, rays| {
         for (&(index, x, y), stats) in tile.iter().zip(stats) {
             for s in first..first + count {
-                stats.add(trace(x, y, &Sampler::new(seed, index, s), rays));
+                stats.add(trace(x, y, &Sampler::of(kind, seed, index, s), rays));
             }
         }
     })
@@ -366,6 +369,7 @@ pub fn render_iterations_until(
         let iteration = Iteration {
             scene,
             camera,
+            sampler: film.sampler,
             seed,
             s,
             method,
@@ -397,6 +401,8 @@ pub fn render_iterations_until(
 struct Iteration<'a> {
     scene: &'a FlatScene,
     camera: &'a Camera,
+    /// The streams: every pixel's (and light subpath's) samples under `seed`, drawn by `sampler`.
+    sampler: SamplerKind,
     seed: u32,
     /// The iteration's index: its sample index in every pixel's streams.
     s: u32,
@@ -429,6 +435,7 @@ impl Iteration<'_> {
     /// subpath order into `buffers`, their splats added to `buffers.splats`. Returns the rays.
     fn light_pass(&self, mode: LightPassMode, buffers: &mut LightPassBuffers) -> u64 {
         let (scene, seed, s, n_paths) = (self.scene, self.seed, self.s, self.n_paths);
+        let kind = self.sampler;
         let pass = LightPass {
             scene,
             camera: self.camera,
@@ -456,7 +463,7 @@ impl Iteration<'_> {
                 for i in c * LIGHT_CHUNK..((c + 1) * LIGHT_CHUNK).min(n_paths) {
                     rays += pass.trace_light_path(
                         i,
-                        &Sampler::new(seed, i, s),
+                        &Sampler::of(kind, seed, i, s),
                         &mut pending,
                         &mut vertices,
                     );
@@ -503,6 +510,7 @@ impl Iteration<'_> {
     /// pixel's value for the iteration (None where its splat sum overflowed), with the rays.
     fn camera_pass(&self, buffers: &LightPassBuffers, w: u32, h: u32) -> Vec<TileValues> {
         let (scene, seed, s, n_paths) = (self.scene, self.seed, self.s, self.n_paths);
+        let kind = self.sampler;
         let (method, faults, radius, merge) = (self.method, self.faults, self.radius, self.merge);
         let camera_pass = bdpt::CameraPass {
             scene,
@@ -559,7 +567,7 @@ impl Iteration<'_> {
                             // from the iteration's photon maps (no light subpath of its own).
                             let n_c = buffers.camera_subpaths[index];
                             for k in 0..n_c {
-                                let sampler = Sampler::new(seed, index as u32 + k * w * h, s);
+                                let sampler = Sampler::of(kind, seed, index as u32 + k * w * h, s);
                                 radiance.push(pass.trace_camera_path(x, y, &sampler, &mut rays));
                             }
                             n_c
@@ -573,7 +581,7 @@ impl Iteration<'_> {
                             let light_path = &buffers.vertices[a as usize..b as usize];
                             let n_c = buffers.camera_subpaths[index];
                             for k in 0..n_c {
-                                let sampler = Sampler::new(seed, index as u32 + k * w * h, s);
+                                let sampler = Sampler::of(kind, seed, index as u32 + k * w * h, s);
                                 camera_pass.trace_camera_path(
                                     x, y, n_c, &sampler, light_path, terms, &mut rays,
                                 );

@@ -13,7 +13,7 @@ use crate::film::PixelStats;
 use crate::layout::{FlatScene, KIND_DIFFUSE};
 use crate::math::geometry::Ray;
 use crate::math::lanes::{self, lanes_of, F8, LANES, U8, V8};
-use crate::math::sampling::{dim_bsdf, dim_light, Sampler};
+use crate::math::sampling::{dim_bsdf, dim_light, Sampler, SamplerKind};
 use crate::transport::camera::Camera;
 use crate::transport::faults::Faults;
 use crate::transport::light::sample_emitter_lanes;
@@ -37,6 +37,7 @@ pub fn trace_pixels(
     scene: &FlatScene,
     camera: &Camera,
     pixels: &[(u32, u32, u32)],
+    kind: SamplerKind,
     seed: u32,
     first: u32,
     count: u32,
@@ -52,7 +53,7 @@ pub fn trace_pixels(
     let end = first + count;
     let start = |slot: &mut Slot, l: usize, p: usize, sample: u32| {
         let (index, x, y) = pixels[p];
-        let path = start_path(camera, x, y, &Sampler::new(seed, index, sample));
+        let path = start_path(camera, x, y, &Sampler::of(kind, seed, index, sample));
         slot.set_path(l, &path);
         slot.pixel[l] = p;
         slot.stream.as_mut_array()[l] = index;
@@ -89,7 +90,12 @@ pub fn trace_pixels(
         for l in lanes_of(slot.live & hits.hit & !diffuse) {
             let hit = hits.get(l);
             let mut path = slot.path(l);
-            let sampler = Sampler::new(seed, slot.stream.as_array()[l], slot.sample.as_array()[l]);
+            let sampler = Sampler::of(
+                kind,
+                seed,
+                slot.stream.as_array()[l],
+                slot.sample.as_array()[l],
+            );
             let on = shade_hit(
                 scene,
                 &mut path,
@@ -103,7 +109,7 @@ pub fn trace_pixels(
             event_lanes.resize(events.len(), l);
             ended |= u32::from(!on) << l;
         }
-        let lit = shade_diffuse_lanes(scene, seed, &hits, diffuse, &mut slot, faults);
+        let lit = shade_diffuse_lanes(scene, kind, seed, &hits, diffuse, &mut slot, faults);
         ended |= diffuse & !lit.going_on;
 
         let blocked_lanes = occluded_lanes(scene, (&lit.origin, &lit.to_light), lit.clear);
@@ -220,6 +226,7 @@ struct LitLanes {
 #[inline]
 fn shade_diffuse_lanes(
     scene: &FlatScene,
+    kind: SamplerKind,
     seed: u32,
     hits: &HitLanes,
     lanes: u32,
@@ -244,6 +251,7 @@ fn shade_diffuse_lanes(
 
     // Step 4 - next-event estimation, one light sample (`shade_hit`'s step 4 with N = 1).
     let u_light = lanes::draw4(
+        kind,
         seed,
         slot.stream,
         slot.sample,
@@ -276,6 +284,7 @@ fn shade_diffuse_lanes(
     // Step 5 - scattering: a cosine-weighted direction about the side wo lies on
     // (`sample_bsdf`'s diffuse lobe, whose weight is the albedo, its pdf cos θ / π).
     let u_bsdf = lanes::draw4(
+        kind,
         seed,
         slot.stream,
         slot.sample,
@@ -340,7 +349,8 @@ mod tests {
     /// mirrors, glass and spheres and on the all-diffuse box, with one shadow ray a vertex (the
     /// lanes) and with two (one by one), with the grey-indirect fault, whose snapshot must
     /// come after the vertex's next-event light, and with a maximum depth and a darkened
-    /// specular bounce, which the lanes' roulette and weight must apply as `take_bsdf_sample`.
+    /// specular bounce, which the lanes' roulette and weight must apply as `take_bsdf_sample`;
+    /// and with both samplers.
     #[test]
     fn the_wavefront_traces_each_samples_own_path_bit_for_bit() {
         for name in ["tncg15_room", "glass_room", "cornell_box"] {
@@ -360,15 +370,21 @@ mod tests {
                 specular_scale: 0.5,
                 ..Faults::NONE
             };
-            for (light_samples, faults) in
-                [(1, Faults::NONE), (2, Faults::NONE), (1, grey), (1, short)]
-            {
+            for (light_samples, faults, kind) in [
+                (1, Faults::NONE, SamplerKind::Independent),
+                (2, Faults::NONE, SamplerKind::Independent),
+                (1, grey, SamplerKind::Independent),
+                (1, short, SamplerKind::Independent),
+                (1, Faults::NONE, SamplerKind::Sobol),
+                (2, Faults::NONE, SamplerKind::Sobol),
+            ] {
                 let mut together = vec![PixelStats::default(); pixels.len()];
                 let (mut rays_together, mut rays_alone) = (0, 0);
                 trace_pixels(
                     &flat,
                     &camera,
                     &pixels,
+                    kind,
                     9,
                     3,
                     8,
@@ -380,7 +396,7 @@ mod tests {
                 for (&(index, x, y), got) in pixels.iter().zip(&together) {
                     let mut want = PixelStats::default();
                     for s in 3..11 {
-                        let sampler = Sampler::new(9, index, s);
+                        let sampler = Sampler::of(kind, 9, index, s);
                         want.add(trace_path(
                             &flat,
                             &camera,
@@ -394,7 +410,7 @@ mod tests {
                     }
                     assert_eq!(
                         *got, want,
-                        "{name}, pixel ({x}, {y}), {light_samples} light samples, {faults:?}"
+                        "{name}, pixel ({x}, {y}), {light_samples} light samples, {faults:?}, {kind}"
                     );
                 }
                 assert_eq!(rays_together, rays_alone, "{name}: rays counted");

@@ -12,13 +12,15 @@
 //! Layout, all little-endian:
 //! - the magic `hexray film\n` (12 bytes), a u32 header length, the header as JSON
 //!   ([`FilmIdentity`]);
-//! - per pixel, row 0 first: sum[3] f64, sum_sq[3] f64, n u64, dropped u64 (64 bytes);
+//! - per pixel, row 0 first: sum[3] f64, sum_sq[3] f64, n u64, dropped u64, even_sum[3] f64,
+//!   even_n u64 (96 bytes; version 1 ends each record before even_sum, at 64 bytes);
 //! - for the batch-means methods, one more such record: the iterations' image means.
 //!
 //! The reader checks that the file is exactly as long as its header says before allocating
 //! anything, so a crafted header cannot make it ask for more memory than the file holds.
 
 use crate::film::{Film, PixelStats};
+use crate::math::sampling::SamplerKind;
 use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
@@ -26,7 +28,9 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 12] = b"hexray film\n";
 /// Bytes of one pixel record.
-const RECORD: usize = 64;
+const RECORD: usize = 96;
+/// Bytes of one pixel record of version 1, which lacks the even-sample sums.
+const RECORD_V1: usize = 64;
 /// The longest header read (a header is a few hundred bytes).
 const MAX_HEADER: u32 = 1 << 16;
 /// The largest image side the renderer accepts (`--width`, `--height`).
@@ -61,6 +65,9 @@ pub struct FilmIdentity {
     pub patch_size: Option<f32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub patch_rays: Option<u32>,
+    /// `--sampler` (absent in films of version 1: independent).
+    #[serde(default)]
+    pub sampler: SamplerKind,
     /// The scene file as given, and the SHA-1 of its bytes.
     pub scene: String,
     pub scene_sha1: String,
@@ -69,7 +76,8 @@ pub struct FilmIdentity {
 }
 
 impl FilmIdentity {
-    pub const VERSION: u32 = 1;
+    /// Version 2 added each record's even-sample sums (`PixelStats::even_sum`, `even_n`).
+    pub const VERSION: u32 = 2;
 }
 
 /// `NAME.film` beside `NAME.exr`.
@@ -83,6 +91,10 @@ fn put_record(out: &mut Vec<u8>, p: &PixelStats) {
     }
     out.extend_from_slice(&p.n.to_le_bytes());
     out.extend_from_slice(&p.dropped.to_le_bytes());
+    for v in &p.even_sum {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&p.even_n.to_le_bytes());
 }
 
 fn get_record(b: &[u8]) -> PixelStats {
@@ -93,6 +105,12 @@ fn get_record(b: &[u8]) -> PixelStats {
         sum_sq: [f(3), f(4), f(5)],
         n: u(6),
         dropped: u(7),
+        even_sum: if b.len() == RECORD {
+            [f(8), f(9), f(10)]
+        } else {
+            [0.0; 3]
+        },
+        even_n: if b.len() == RECORD { u(11) } else { 0 },
     }
 }
 
@@ -147,12 +165,15 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
         .with_context(|| format!("{name}: the header is cut short"))?;
     let id: FilmIdentity =
         serde_json::from_slice(&header).with_context(|| format!("{name}: unreadable header"))?;
+    // Version 1 lacks the even-sample sums, which only the Sobol sampler's error estimate
+    // uses; every film of version 1 was drawn by the independent sampler.
     ensure!(
-        id.version == FilmIdentity::VERSION,
-        "{name}: film format version {} (this hexray reads version {})",
+        id.version == FilmIdentity::VERSION || id.version == 1,
+        "{name}: film format version {} (this hexray reads versions 1 and {})",
         id.version,
         FilmIdentity::VERSION
     );
+    let record = if id.version == 1 { RECORD_V1 } else { RECORD };
     ensure!(
         (1..=MAX_SIDE).contains(&id.width) && (1..=MAX_SIDE).contains(&id.height),
         "{name}: image size {}x{} is out of range",
@@ -164,7 +185,7 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
     // The batch-means methods keep one more record: the iterations' image means.
     let splats = method.splats();
     let pixels = id.width as u64 * id.height as u64;
-    let expected = 16 + header_len as u64 + (pixels + u64::from(splats)) * RECORD as u64;
+    let expected = 16 + header_len as u64 + (pixels + u64::from(splats)) * record as u64;
     if len != expected {
         bail!(
             "{name}: {len} bytes, but a {}x{} film of this method is {expected} bytes \
@@ -176,8 +197,8 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
     let mut body = vec![0u8; (len - 16 - header_len as u64) as usize];
     file.read_exact(&mut body)
         .with_context(|| format!("reading {name}"))?;
-    let mut records = body.chunks_exact(RECORD).map(get_record);
-    let mut film = Film::new(id.width, id.height);
+    let mut records = body.chunks_exact(record).map(get_record);
+    let mut film = Film::new(id.width, id.height).with_sampler(id.sampler);
     for (i, p) in film.pixels.iter_mut().enumerate() {
         *p = records.next().unwrap();
         check_record(p, id.spp).with_context(|| {
@@ -208,8 +229,18 @@ fn check_record(p: &PixelStats, spp: u64) -> Result<()> {
         p.dropped
     );
     ensure!(
-        p.sum.iter().chain(&p.sum_sq).all(|v| v.is_finite()),
+        p.sum
+            .iter()
+            .chain(&p.sum_sq)
+            .chain(&p.even_sum)
+            .all(|v| v.is_finite()),
         "a sum is not finite"
+    );
+    ensure!(
+        p.even_n <= p.n,
+        "{} even-index samples of {} in all",
+        p.even_n,
+        p.n
     );
     ensure!(
         p.sum_sq.iter().all(|&v| v >= 0.0),
@@ -234,6 +265,7 @@ mod tests {
             height,
             spp,
             seed: 7,
+            sampler: SamplerKind::Sobol,
             method: method.into(),
             light_samples: 1,
             merge_radius: Some(0.012_345_679),
@@ -278,6 +310,39 @@ mod tests {
             let (g, id2) = read(&path).unwrap();
             assert_eq!(id, id2);
             assert!(f.pixels == g.pixels && f.iteration_means == g.iteration_means);
+            assert_eq!(g.sampler, id.sampler);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A film of version 1 (records without the even-sample sums, no sampler in the header)
+    /// still reads: its sums as written, the independent sampler.
+    #[test]
+    fn a_version_1_film_still_reads() {
+        let dir = std::env::temp_dir().join(format!("hexray-film-v1-{}", std::process::id()));
+        let path = dir.join("v1.film");
+        let f = film(3, 2, 5, false);
+        let mut id = serde_json::to_value(identity(3, 2, 5)).unwrap();
+        id["version"] = 1.into();
+        id.as_object_mut().unwrap().remove("sampler");
+        let header = serde_json::to_vec(&id).unwrap();
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(&header);
+        for p in &f.pixels {
+            let mut record = Vec::new();
+            put_record(&mut record, p);
+            bytes.extend_from_slice(&record[..RECORD_V1]);
+        }
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
+        let (g, id) = read(&path).unwrap();
+        assert_eq!((id.version, g.sampler), (1, SamplerKind::Independent));
+        for (a, b) in f.pixels.iter().zip(&g.pixels) {
+            assert_eq!(
+                (a.sum, a.sum_sq, a.n, a.dropped),
+                (b.sum, b.sum_sq, b.n, b.dropped)
+            );
         }
         let _ = std::fs::remove_dir_all(&dir);
     }

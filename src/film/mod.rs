@@ -5,6 +5,7 @@
 //! without bias by (Σx² − (Σx)²/n) / (n (n − 1)). Sums are kept in f64: at 10^5 samples an f32
 //! sum has lost about 17 of its 24 bits to the magnitude of the running total.
 
+use crate::math::sampling::SamplerKind;
 use glam::Vec3;
 
 pub mod file;
@@ -22,12 +23,20 @@ pub struct PixelStats {
     pub n: u64,
     /// Samples that were not finite and were dropped.
     pub dropped: u64,
+    /// The sum and count of the accumulated samples of even index (0, 2, 4, ...): under the
+    /// Sobol sampler, one of the pixel's two independent streams (`SamplerKind`), from which
+    /// [`PixelStats::var_of_mean_from_streams`] estimates the mean's error.
+    pub even_sum: [f64; 3],
+    pub even_n: u64,
 }
 
 impl PixelStats {
-    /// Adds one sample, or counts it as dropped when any channel is NaN or infinite.
+    /// Adds the pixel's next sample, or counts it as dropped when any channel is NaN or
+    /// infinite. Samples come in sample order (the renderers add them so), so the sample's
+    /// index is the count so far, `n + dropped`.
     #[inline]
     pub fn add(&mut self, x: Vec3) {
+        let even = (self.n + self.dropped).is_multiple_of(2);
         if !x.is_finite() {
             self.dropped += 1;
             return;
@@ -36,8 +45,12 @@ impl PixelStats {
             let v = x[c] as f64;
             self.sum[c] += v;
             self.sum_sq[c] += v * v;
+            if even {
+                self.even_sum[c] += v;
+            }
         }
         self.n += 1;
+        self.even_n += u64::from(even);
     }
 
     /// Folds in another set of sums (a later batch of samples of the same pixel).
@@ -49,6 +62,10 @@ impl PixelStats {
         }
         self.n += o.n;
         self.dropped += o.dropped;
+        for c in 0..3 {
+            self.even_sum[c] += o.even_sum[c];
+        }
+        self.even_n += o.even_n;
     }
 
     pub fn mean(&self) -> [f64; 3] {
@@ -67,6 +84,25 @@ impl PixelStats {
         std::array::from_fn(|c| {
             let ss = self.sum_sq[c] - self.sum[c] * self.sum[c] / n;
             ss.max(0.0) / (n * (n - 1.0))
+        })
+    }
+
+    /// The estimated variance of the mean from the pixel's two independent streams, the
+    /// samples of even and of odd index (`SamplerKind::Sobol`): with stream means e and o over
+    /// n_e and n_o samples, (e − o)² n_e n_o / n², unbiased where each stream's variance
+    /// falls as one over its count (and exactly (e − o)² / 4 for equal counts, whatever the
+    /// rate). One degree of freedom per pixel: right on average over many pixels (an image's
+    /// error), too rough to judge one pixel by. Zero before one sample in each stream.
+    pub fn var_of_mean_from_streams(&self) -> [f64; 3] {
+        let (ne, no) = (self.even_n, self.n - self.even_n);
+        if ne == 0 || no == 0 {
+            return [0.0; 3];
+        }
+        let (ne, no, n) = (ne as f64, no as f64, self.n as f64);
+        std::array::from_fn(|c| {
+            let e = self.even_sum[c] / ne;
+            let o = (self.sum[c] - self.even_sum[c]) / no;
+            (e - o) * (e - o) * ne * no / (n * n)
         })
     }
 }
@@ -92,6 +128,9 @@ pub struct Film {
     /// The image mean of each iteration, one sample per iteration, where pixels share samples
     /// (`Some` for light tracing and BDPT; `None` where pixels are independent).
     pub iteration_means: Option<PixelStats>,
+    /// The sampler that drew the samples (`--sampler`): it decides how their error is
+    /// estimated ([`Film::var_of_mean`]), and the renderers draw the film's samples with it.
+    pub sampler: SamplerKind,
 }
 
 impl Film {
@@ -101,6 +140,24 @@ impl Film {
             height,
             pixels: vec![PixelStats::default(); (width * height) as usize],
             iteration_means: None,
+            sampler: SamplerKind::Independent,
+        }
+    }
+
+    /// This film, drawn with `sampler`.
+    pub fn with_sampler(self, sampler: SamplerKind) -> Film {
+        Film { sampler, ..self }
+    }
+
+    /// The estimated variance of the mean of `p`, a pixel of this film or its iteration
+    /// means: from the samples' own scatter where they are independent
+    /// ([`PixelStats::var_of_mean`]), from the two independent streams' means where they are
+    /// Sobol points, whose scatter within a stream understates nothing but measures nothing
+    /// either ([`PixelStats::var_of_mean_from_streams`]).
+    pub fn var_of_mean(&self, p: &PixelStats) -> [f64; 3] {
+        match self.sampler {
+            SamplerKind::Independent => p.var_of_mean(),
+            SamplerKind::Sobol => p.var_of_mean_from_streams(),
         }
     }
 
@@ -133,13 +190,13 @@ impl Film {
     pub fn variance_image(&self) -> Vec<[f32; 3]> {
         self.pixels
             .iter()
-            .map(|p| p.var_of_mean().map(|x| x as f32))
+            .map(|p| self.var_of_mean(p).map(|x| x as f32))
             .collect()
     }
 
     /// The relMSE this film's image is expected to have against the exact image, from its own
     /// noise: the mean over pixel-channels of var / (m² + 0.01), with m a pixel's mean and var
-    /// the estimated variance of that mean ([`PixelStats::var_of_mean`]), what
+    /// the estimated variance of that mean ([`Film::var_of_mean`]), what
     /// `hexray compare` measures against a reference, E (x − r)² = var + bias². Each pixel's
     /// samples are independent (a path-traced sample, or an iteration, whose streams are its
     /// own), so its variance is right even where an iteration's pixels share light subpaths. A
@@ -150,7 +207,7 @@ impl Film {
         }
         let mut sum = 0.0;
         for p in &self.pixels {
-            let (m, v) = (p.mean(), p.var_of_mean());
+            let (m, v) = (p.mean(), self.var_of_mean(p));
             for c in 0..3 {
                 sum += v[c] / (m[c] * m[c] + RELMSE_EPSILON);
             }
@@ -167,14 +224,14 @@ impl Film {
         let mut m = [0.0; 3];
         let mut v = [0.0; 3];
         for p in &self.pixels {
-            let (pm, pv) = (p.mean(), p.var_of_mean());
+            let (pm, pv) = (p.mean(), self.var_of_mean(p));
             for c in 0..3 {
                 m[c] += pm[c];
                 v[c] += pv[c];
             }
         }
         let se = match &self.iteration_means {
-            Some(batches) => batches.var_of_mean().map(f64::sqrt),
+            Some(batches) => self.var_of_mean(batches).map(f64::sqrt),
             None => v.map(|x| x.sqrt() / n),
         };
         (m.map(|x| x / n), se)

@@ -82,6 +82,12 @@ pub struct Frame {
     /// farther merges within `merge_radius`, a nearer one within its share
     /// (`merging::footprint_share`; 0: every vertex within `merge_radius`).
     pub merge_reach: f32,
+    /// `SamplerKind::code` of the film's sampler (`--sampler`).
+    pub sampler: u32,
+    /// To the 16-byte boundary of `planar_mirrors`.
+    pub pad2: u32,
+    pub pad3: u32,
+    pub pad4: u32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
 }
@@ -151,6 +157,10 @@ impl Frame {
                 && !faults.merge_ignores_clearance) as u32,
             clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
             merge_reach: 0.0,
+            sampler: 0,
+            pad2: 0,
+            pad3: 0,
+            pad4: 0,
             planar_mirrors: std::array::from_fn(|i| {
                 scene.planar_mirrors.get(i).copied().unwrap_or_default()
             }),
@@ -167,6 +177,9 @@ pub struct PixelSums {
     pub n: f32,
     pub sum_sq: [f32; 3],
     pub dropped: f32,
+    /// The sum and count of the finite samples of even index (`PixelStats::even_sum`).
+    pub even_sum: [f32; 3],
+    pub even_n: f32,
 }
 
 /// Workgroup size of the kernel (8 x 8, `@workgroup_size` in `shaders/path.wgsl`).

@@ -11,6 +11,7 @@
 //! infinities and NaN where the scalar functions accept them). The compiler's own vectorisation of
 //! plain loops over arrays leaves most of this work scalar.
 
+use crate::math::sampling::SamplerKind;
 use glam::Vec3;
 use std::f32::consts::FRAC_PI_2;
 use wide::{f32x8, i32x8, u32x8};
@@ -315,15 +316,67 @@ pub fn mask(bits: u32) -> F8 {
 }
 
 /// [`crate::math::sampling::Sampler::draw4`] in lanes: block `dim` of the streams (`pixel`,
-/// `sample`, `seed`), as four rows of eight numbers.
+/// `sample`, `seed`) of `kind`, as four rows of eight numbers.
 #[inline(always)]
-pub fn draw4(seed: u32, pixel: U8, sample: U8, dim: U8) -> [F8; 4] {
-    let v = pcg4d([pixel, sample, dim, u32x8::splat(seed)]);
+pub fn draw4(kind: SamplerKind, seed: u32, pixel: U8, sample: U8, dim: U8) -> [F8; 4] {
+    let v = match kind {
+        SamplerKind::Independent => pcg4d([pixel, sample, dim, u32x8::splat(seed)]),
+        SamplerKind::Sobol => sobol_draw4_bits(seed, pixel, sample, dim),
+    };
     // (x >> 8) < 2^24 converts exactly through i32, as `u32_to_unit_f32` converts it.
     v.map(|row| {
         let top: i32x8 = bytemuck::cast(row.unbounded_shr_scalar(8));
         f32x8::from_i32x8(top) * f32x8::splat(1.0 / 16_777_216.0)
     })
+}
+
+/// [`crate::math::sampling::sobol_draw4_bits`] in lanes, step for step (the Sobol generator
+/// over all 16 bits, masked, where the scalar one skips the clear bits: the same xors).
+#[inline(always)]
+fn sobol_draw4_bits(seed: u32, pixel: U8, sample: U8, dim: U8) -> [U8; 4] {
+    use crate::math::sampling::{SOBOL_BITS, SOBOL_DIRECTIONS, SOBOL_KEY};
+    let splat = u32x8::splat;
+    // Step 1 - the stream, the randomisation and the point in it (two streams).
+    let (stream, point) = (sample & splat(1), sample >> 1);
+    let randomisation = ((point >> SOBOL_BITS) << 1) + stream;
+    // Step 2 - the seeds.
+    let shuffle = pcg4d([pixel, randomisation ^ splat(SOBOL_KEY), dim, splat(seed)]);
+    let scramble = pcg4d(shuffle);
+    // Step 3 - the shuffle, in the reversed domain.
+    let index_reversed = owen_reversed(reverse_bits(point), shuffle[0]) & splat(0xffff_0000);
+    // Step 4 - the scrambled point.
+    let mut x = [u32x8::ZERO; 4];
+    for (k, row) in SOBOL_DIRECTIONS.iter().enumerate() {
+        let take = u32x8::ZERO - ((index_reversed >> (31 - k as u32)) & splat(1));
+        for d in 0..4 {
+            x[d] ^= splat(row[d]) & take;
+        }
+    }
+    std::array::from_fn(|d| reverse_bits(owen_reversed(x[d], scramble[d])))
+}
+
+/// [`crate::math::sampling::owen_reversed`] in lanes.
+#[inline(always)]
+fn owen_reversed(x: U8, seed: U8) -> U8 {
+    let splat = u32x8::splat;
+    let mut x = x ^ (x * splat(0x3d20_adea));
+    x += seed;
+    x *= (seed >> 16) | splat(1);
+    x ^= x * splat(0x0552_6c56);
+    x ^ (x * splat(0x53a2_2864))
+}
+
+/// `u32::reverse_bits` in lanes: adjacent bits, pairs, nibbles, bytes and halves swapped.
+#[inline(always)]
+fn reverse_bits(x: U8) -> U8 {
+    let swap = |x: U8, mask: u32, k: u32| {
+        ((x >> k) & u32x8::splat(mask)) | ((x & u32x8::splat(mask)) << k)
+    };
+    let x = swap(x, 0x5555_5555, 1);
+    let x = swap(x, 0x3333_3333, 2);
+    let x = swap(x, 0x0f0f_0f0f, 4);
+    let x = swap(x, 0x00ff_00ff, 8);
+    (x >> 16) | (x << 16)
 }
 
 /// [`crate::math::sampling::pcg4d`] in lanes: row k holds the k-th input (and output) of each lane.
@@ -449,8 +502,8 @@ mod tests {
     use crate::math::geometry::{offset_ray_origin as offset_scalar, step_away_scalar};
     use crate::math::sampling::{self, u32_to_unit_f32, Sampler};
 
-    fn draw4_scalar(seed: u32, pixel: u32, sample: u32, dim: u32) -> [f32; 4] {
-        Sampler::new(seed, pixel, sample).draw4(dim)
+    fn draw4_scalar(kind: SamplerKind, seed: u32, pixel: u32, sample: u32, dim: u32) -> [f32; 4] {
+        Sampler::of(kind, seed, pixel, sample).draw4(dim)
     }
 
     fn lanes_of(values: &[f32], start: usize) -> F8 {
@@ -459,17 +512,25 @@ mod tests {
 
     #[test]
     fn draw4_in_lanes_is_the_samplers_draw4() {
-        for k in 0..64u32 {
+        for (k, kind) in (0..64u32)
+            .flat_map(|k| [SamplerKind::Independent, SamplerKind::Sobol].map(|kind| (k, kind)))
+        {
             let (pixel, sample, dim) = (
                 uints(|l| k * 977 + l as u32 * 131),
                 uints(|l| k * 3 + l as u32),
                 uints(|l| (k + l as u32) % 41),
             );
-            let rows =
-                draw4(k.wrapping_mul(2_654_435_761), pixel, sample, dim).map(|r| r.to_array());
+            let rows = draw4(kind, k.wrapping_mul(2_654_435_761), pixel, sample, dim)
+                .map(|r| r.to_array());
             let (pixel, sample, dim) = (pixel.to_array(), sample.to_array(), dim.to_array());
             for l in 0..LANES {
-                let want = draw4_scalar(k.wrapping_mul(2_654_435_761), pixel[l], sample[l], dim[l]);
+                let want = draw4_scalar(
+                    kind,
+                    k.wrapping_mul(2_654_435_761),
+                    pixel[l],
+                    sample[l],
+                    dim[l],
+                );
                 let got = [rows[0][l], rows[1][l], rows[2][l], rows[3][l]];
                 assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits));
             }

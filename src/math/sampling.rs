@@ -9,6 +9,9 @@
 //! 2020: a 4-in/4-out permutation of u32 vectors with good avalanche on every input lane. One call
 //! gives four numbers, so a *dimension* here names a block of four: block 0 is the camera, and
 //! bounce `k` uses blocks `1 + 2k` (light sampling and roulette) and `2 + 2k` (BSDF sampling).
+//!
+//! A block's four numbers are either independent hashes or a 4-D Owen-scrambled Sobol point
+//! ([`SamplerKind`]); either way they are a function of (seed, pixel, sample, block) alone.
 
 use glam::Vec3;
 use std::f32::consts::FRAC_PI_2;
@@ -103,6 +106,60 @@ pub fn dim_mirror(bounce: u32) -> u32 {
 /// [`dim_light_extra`].
 pub const MAX_LIGHT_SAMPLES: u32 = 256;
 
+/// How a stream's numbers are drawn (`--sampler`).
+///
+/// - `Independent`: every block is [`pcg4d`] of (pixel, sample, block, seed), independent of
+///   every other.
+/// - `Sobol`: every block is a 4-D Owen-scrambled Sobol point (Burley 2020, "Practical
+///   Hash-based Owen Scrambling", JCGT 9(4)), *padded*: each block of each pixel has its own
+///   shuffle of the point order and its own scramble, both hashed from (pixel, block, seed), so
+///   the blocks of one path are as independent of each other as under `Independent`, while the
+///   samples of one block in one pixel are stratified against each other. No block lies past
+///   a table: the four Sobol dimensions serve every block.
+///
+///   The samples of a pixel are two independent randomisations of the sequence, interleaved:
+///   sample `i` is point `i / 2` of stream `i % 2`. Their means are independent estimates, which
+///   is what the film's standard errors need (`Film::pixel_var_of_mean`): the samples within a
+///   stream are not independent, and their sample variance does not measure the mean's error.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    #[default]
+    Independent,
+    Sobol,
+}
+
+impl SamplerKind {
+    /// The name on the command line and in metadata.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
+        }
+    }
+
+    /// `SAMPLER_*` in `shaders/sampling.wgsl`.
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+impl std::fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The random stream of one camera sample: (seed, pixel, sample index) fixed, the dimension
 /// block chosen per draw.
 #[derive(Clone, Copy, Debug)]
@@ -110,22 +167,170 @@ pub struct Sampler {
     pub seed: u32,
     pub pixel: u32,
     pub sample: u32,
+    pub kind: SamplerKind,
 }
 
 impl Sampler {
+    /// The independent stream (the default sampler).
     pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
+        Self::of(SamplerKind::Independent, seed, pixel, sample)
+    }
+
+    /// The stream of `kind`.
+    pub fn of(kind: SamplerKind, seed: u32, pixel: u32, sample: u32) -> Self {
         Self {
             seed,
             pixel,
             sample,
+            kind,
         }
     }
 
     /// Four uniform numbers in [0, 1) for dimension block `dim`.
     #[inline]
     pub fn draw4(&self, dim: u32) -> [f32; 4] {
-        pcg4d([self.pixel, self.sample, dim, self.seed]).map(u32_to_unit_f32)
+        match self.kind {
+            SamplerKind::Independent => {
+                pcg4d([self.pixel, self.sample, dim, self.seed]).map(u32_to_unit_f32)
+            }
+            SamplerKind::Sobol => {
+                sobol_draw4_bits(self.seed, self.pixel, self.sample, dim).map(u32_to_unit_f32)
+            }
+        }
     }
+}
+
+/// The independent randomisations a pixel's Sobol samples are split into (see [`SamplerKind`]).
+pub const SOBOL_STREAMS: u32 = 2;
+// The lanes' Sobol points (`lanes::sobol_draw4_bits`) take the stream as the sample's low bit.
+const _: () = assert!(SOBOL_STREAMS == 2);
+
+/// Bits of a point's index within one randomisation: 2^16 points of a stream share a shuffle
+/// and scramble, and the next 2^16 are a new randomisation (keyed by the index's upper bits),
+/// so a Sobol point costs 16 steps of the generator whatever the sample count.
+pub const SOBOL_BITS: u32 = 16;
+
+/// Keeps the Sobol scrambles' hash inputs apart from the independent sampler's: the
+/// randomisation's number is xored with this before it takes the sample's lane of [`pcg4d`].
+pub(crate) const SOBOL_KEY: u32 = 0x50B0_1000;
+
+/// Direction numbers of the first four Sobol dimensions, bit-reversed (least significant
+/// digit in bit 31): row `k` holds bit `k`'s column of each dimension's generator matrix. From
+/// Joe and Kuo's primitive polynomials and initial numbers (new-joe-kuo-6.21201): dimension 0 is
+/// van der Corput's; 1 is x + 1 with m = (1); 2 is x² + x + 1 with m = (1, 3); 3 is
+/// x³ + x + 1 with m = (1, 3, 1). Kept reversed because the Owen scrambling below works on
+/// reversed values. `shaders/sampling.wgsl` holds the same numbers (`tests/sampler.rs`).
+pub const SOBOL_DIRECTIONS: [[u32; 4]; SOBOL_BITS as usize] = sobol_directions();
+
+const fn sobol_directions() -> [[u32; 4]; SOBOL_BITS as usize] {
+    // Per dimension: the degree s, the polynomial's inner coefficients a (s - 1 bits, most
+    // significant first), and the initial m_1..m_s.
+    const S: [u32; 4] = [0, 1, 2, 3];
+    const A: [u32; 4] = [0, 0, 1, 1];
+    const M: [[u32; 3]; 4] = [[0, 0, 0], [1, 0, 0], [1, 3, 0], [1, 3, 1]];
+    const N: usize = SOBOL_BITS as usize;
+    let mut v = [[0u32; 4]; N];
+    let mut k = 0;
+    while k < N {
+        v[k][0] = 1 << (31 - k);
+        k += 1;
+    }
+    let mut d = 1;
+    while d < 4 {
+        let s = S[d] as usize;
+        let mut k = 0;
+        while k < N {
+            v[k][d] = if k < s {
+                M[d][k] << (31 - k)
+            } else {
+                // v_k = v_{k-s} ^ (v_{k-s} >> s) ^ Σ_{i=1}^{s-1} a_i v_{k-i}.
+                let mut x = v[k - s][d] ^ (v[k - s][d] >> s);
+                let mut i = 1;
+                while i < s {
+                    if (A[d] >> (s - 1 - i)) & 1 == 1 {
+                        x ^= v[k - i][d];
+                    }
+                    i += 1;
+                }
+                x
+            };
+            k += 1;
+        }
+        d += 1;
+    }
+    let mut k = 0;
+    while k < N {
+        let mut d = 0;
+        while d < 4 {
+            v[k][d] = v[k][d].reverse_bits();
+            d += 1;
+        }
+        k += 1;
+    }
+    v
+}
+
+/// Point `index` (below 2^16) of the first four Sobol dimensions, as 32-bit fractions.
+pub fn sobol4(index: u32) -> [u32; 4] {
+    sobol4_reversed(index.reverse_bits()).map(u32::reverse_bits)
+}
+
+/// [`sobol4`] in the reversed domain: the xor of the reversed direction numbers of the set
+/// bits of the index, whose bit k is bit 31 − k of `index_reversed`.
+#[inline]
+fn sobol4_reversed(index_reversed: u32) -> [u32; 4] {
+    let mut x = [0u32; 4];
+    // The set bits only, from bit 31 down (the index has 16 bits: k < 16).
+    let mut bits = index_reversed & 0xffff_0000;
+    while bits != 0 {
+        let k = bits.leading_zeros();
+        let row = SOBOL_DIRECTIONS[k as usize];
+        for d in 0..4 {
+            x[d] ^= row[d];
+        }
+        bits &= !(0x8000_0000 >> k);
+    }
+    x
+}
+
+/// Owen scrambling in base 2 of a bit-reversed value, keyed by `seed`: each digit flipped or
+/// not as a hash of the digits above it decides (reversed, they are the lower bits, which the
+/// multiplies carry upward). The Laine-Karras construction with the constants Vegdahl found to
+/// scramble every bit well ("Building a Better LK Hash", 2021; Cycles uses them too).
+#[inline]
+pub(crate) fn owen_reversed(mut x: u32, seed: u32) -> u32 {
+    x ^= x.wrapping_mul(0x3d20_adea);
+    x = x.wrapping_add(seed);
+    x = x.wrapping_mul((seed >> 16) | 1);
+    x ^= x.wrapping_mul(0x0552_6c56);
+    x ^= x.wrapping_mul(0x53a2_2864);
+    x
+}
+
+/// Block `dim` of sample `sample` of `pixel` under [`SamplerKind::Sobol`], as 32-bit fractions
+/// (Burley 2020, section 4: a shuffled, scrambled 4-D Sobol point).
+///
+/// 1. The stream and the point in it: sample i is point j = i / 2 of stream i % 2; points
+///    2^16 apart fall in different randomisations.
+/// 2. Seeds from the randomisation's key (pixel, randomisation, block, seed): one to shuffle
+///    the points' order, one per dimension to scramble it.
+/// 3. The shuffle: the point's 16 bits Owen-scrambled, so that each block of each pixel walks
+///    the sequence in its own order (the first 2^m points of any shuffle are still an aligned
+///    run of 2^m Sobol points) and blocks are not correlated.
+/// 4. The Sobol point of the shuffled index, each dimension Owen-scrambled.
+#[inline]
+pub fn sobol_draw4_bits(seed: u32, pixel: u32, sample: u32, dim: u32) -> [u32; 4] {
+    // Step 1 - the stream, the randomisation and the point in it.
+    let (stream, point) = (sample % SOBOL_STREAMS, sample / SOBOL_STREAMS);
+    let randomisation = (point >> SOBOL_BITS) * SOBOL_STREAMS + stream;
+    // Step 2 - the seeds.
+    let shuffle = pcg4d([pixel, randomisation ^ SOBOL_KEY, dim, seed]);
+    let scramble = pcg4d(shuffle);
+    // Step 3 - the shuffle, in the reversed domain: the index's 16 bits are the top 16.
+    let index_reversed = owen_reversed(point.reverse_bits(), shuffle[0]) & 0xffff_0000;
+    // Step 4 - the scrambled point.
+    let x = sobol4_reversed(index_reversed);
+    std::array::from_fn(|d| owen_reversed(x[d], scramble[d]).reverse_bits())
 }
 
 /// (sin 2πu, cos 2πu) for u in [0, 1): the angle is reduced to the nearest quarter turn exactly
@@ -259,6 +464,66 @@ mod tests {
             );
         }
         assert!(worst < 2.5e-7, "worst error {worst:e}");
+    }
+
+    /// Points 1 to 3 of the first four Sobol dimensions, by hand from the direction numbers.
+    #[test]
+    fn sobol_points_start_as_joe_and_kuo_tabulate() {
+        let half = 1u32 << 31;
+        assert_eq!(sobol4(0), [0; 4]);
+        assert_eq!(sobol4(1), [half; 4]);
+        assert_eq!(sobol4(2), [half >> 1, 3 << 30, 3 << 30, 3 << 30]);
+        assert_eq!(sobol4(3), [3 << 30, 1 << 30, 1 << 30, 1 << 30]);
+    }
+
+    /// The first 2^m points of one stream of a pixel's block, however shuffled and scrambled,
+    /// put exactly one point in each of the 2^m elementary boxes of every shape 2^-a x 2^-(m-a)
+    /// of dimensions 0 and 1 (a (0, m, 2)-net), and one in each interval 2^-m of every
+    /// dimension: the stratification the sampler is for.
+    #[test]
+    fn each_stream_of_a_block_is_a_net() {
+        let m = 6u32;
+        for (seed, pixel, dim) in [(1u32, 0u32, 0u32), (7, 4095, 3), (99, 17, 0x4000_0002)] {
+            for stream in 0..SOBOL_STREAMS {
+                let points: Vec<[u32; 4]> = (0..1u32 << m)
+                    .map(|j| sobol_draw4_bits(seed, pixel, j * SOBOL_STREAMS + stream, dim))
+                    .collect();
+                for a in 0..=m {
+                    let mut seen = vec![false; 1 << m];
+                    for p in &points {
+                        let cell = if a == 0 { 0 } else { p[0] >> (32 - a) } << (m - a)
+                            | if a == m { 0 } else { p[1] >> (32 - (m - a)) };
+                        assert!(
+                            !seen[cell as usize],
+                            "two points in one box ({a}, {})",
+                            m - a
+                        );
+                        seen[cell as usize] = true;
+                    }
+                }
+                for d in 0..4 {
+                    let mut cells: Vec<u32> = points.iter().map(|p| p[d] >> (32 - m)).collect();
+                    cells.sort_unstable();
+                    cells.dedup();
+                    assert_eq!(cells.len(), 1 << m, "dimension {d} not stratified");
+                }
+            }
+        }
+    }
+
+    /// The shuffle and scramble come from (seed, pixel, sample's stream, block): each changes
+    /// the numbers, and the two streams of a pixel differ.
+    #[test]
+    fn sobol_streams_differ_in_every_key() {
+        let draw = |seed, pixel, sample, dim| {
+            Sampler::of(SamplerKind::Sobol, seed, pixel, sample).draw4(dim)
+        };
+        let base = draw(1, 2, 6, 4);
+        assert_ne!(base, draw(9, 2, 6, 4));
+        assert_ne!(base, draw(1, 9, 6, 4));
+        assert_ne!(base, draw(1, 2, 7, 4));
+        assert_ne!(base, draw(1, 2, 8, 4));
+        assert_ne!(base, draw(1, 2, 6, 9));
     }
 
     #[test]

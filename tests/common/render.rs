@@ -13,6 +13,7 @@ use hexray::cpu::{
 use hexray::film::Film;
 use hexray::gpu::{Checks, GpuRenderer, Residency};
 use hexray::layout::FlatScene;
+use hexray::math::sampling::SamplerKind;
 use hexray::scene::Scene;
 use hexray::transport::camera::Camera;
 use hexray::transport::faults::Faults;
@@ -47,8 +48,8 @@ enum Source<'a> {
 
 /// A render of a scene, seen by its camera. Defaults: 32x32, 1 sample (or iteration), seed 0,
 /// path tracing, one shadow ray per diffuse vertex, no planted fault, the scene's default merge
-/// radius schedule. The CPU renders on all cores; the GPU with the kernel and residency the CLI
-/// uses and no runtime checks.
+/// radius schedule, the independent sampler. The CPU renders on all cores; the GPU with the
+/// kernel and residency the CLI uses and no runtime checks.
 #[derive(Clone, Copy)]
 pub struct Render<'a> {
     source: Source<'a>,
@@ -61,6 +62,7 @@ pub struct Render<'a> {
     faults: Faults,
     radius: Option<MergeRadius>,
     radiosity: RadiositySettings,
+    sampler: SamplerKind,
 }
 
 impl<'a> Render<'a> {
@@ -86,7 +88,18 @@ impl<'a> Render<'a> {
             faults: Faults::NONE,
             radius: None,
             radiosity: RadiositySettings::default(),
+            sampler: SamplerKind::Independent,
         }
+    }
+
+    /// The sampler that draws the film's numbers (`--sampler`).
+    pub fn sampler(self, sampler: SamplerKind) -> Self {
+        Render { sampler, ..self }
+    }
+
+    /// An empty film of this render's size and sampler.
+    fn new_film(&self) -> Film {
+        Film::new(self.width, self.height).with_sampler(self.sampler)
     }
 
     pub fn size(self, width: u32, height: u32) -> Self {
@@ -186,7 +199,7 @@ impl<'a> Render<'a> {
     pub fn cpu(&self) -> Film {
         let (scene, flat) = self.loaded();
         let camera = self.camera(&scene);
-        let mut film = Film::new(self.width, self.height);
+        let mut film = self.new_film();
         if self.method.splats() {
             let radius = self
                 .radius
@@ -244,7 +257,7 @@ impl<'a> Render<'a> {
     pub fn gpu(&self) -> Film {
         let mut r = self.gpu_renderer();
         r.set_light_samples(self.light_samples);
-        let mut film = Film::new(self.width, self.height);
+        let mut film = self.new_film();
         r.render(0, self.spp, &mut film).unwrap();
         film
     }
@@ -256,7 +269,7 @@ impl<'a> Render<'a> {
         use std::sync::atomic::{AtomicBool, Ordering};
         let (_, flat) = self.loaded();
         let mut target = self.backend(backend, &flat);
-        let mut film = Film::new(self.width, self.height);
+        let mut film = self.new_film();
         let stop = AtomicBool::new(false);
         std::thread::scope(|s| {
             s.spawn(|| {
@@ -276,7 +289,7 @@ impl<'a> Render<'a> {
         use hexray::render::{render_progressive, Budget, StopReason};
         let (_, flat) = self.loaded();
         let mut target = self.backend(backend, &flat);
-        let mut film = Film::new(self.width, self.height);
+        let mut film = self.new_film();
         let budget = Budget {
             spp: Some(self.spp),
             relmse: Some(relmse),

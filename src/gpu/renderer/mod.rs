@@ -315,6 +315,8 @@ impl GpuRenderer {
         stop: &AtomicBool,
     ) -> Result<()> {
         crate::film::check_film_for(self.method, film)?;
+        // The film's samples are drawn with its sampler.
+        self.frame.sampler = film.sampler.code();
         let mut done = 0;
         while done < count {
             let n = (count - done).min(MAX_PASS_SPP);
@@ -485,9 +487,11 @@ impl GpuRenderer {
             for c in 0..3 {
                 p.sum[c] += s.sum[c] as f64;
                 p.sum_sq[c] += s.sum_sq[c] as f64;
+                p.even_sum[c] += s.even_sum[c] as f64;
             }
             p.n += s.n as u64;
             p.dropped += s.dropped as u64;
+            p.even_n += s.even_n as u64;
         }
         Ok(())
     }
