@@ -24,16 +24,13 @@ fn render(scene: &str, seed: u32, spp: u32, out: &Path) {
 }
 
 fn render_with(scene: &str, seed: u32, spp: u32, method: &str, out: &Path) {
+    render_args(scene, seed, spp, &["--method", method], out);
+}
+
+fn render_args(scene: &str, seed: u32, spp: u32, extra: &[&str], out: &Path) {
     let o = hexray()
-        .args([
-            scene,
-            "--backend",
-            "cpu",
-            "--variance",
-            "--quiet",
-            "--method",
-            method,
-        ])
+        .args([scene, "--backend", "cpu", "--variance", "--quiet"])
+        .args(extra)
         .args(["--width", SIZE, "--height", SIZE])
         .args(["--seed", &seed.to_string(), "--spp", &spp.to_string()])
         .arg("--out")
@@ -245,6 +242,50 @@ fn a_part_of_another_method_is_refused_naming_both() {
         "{stderr}"
     );
     assert!(!dir.join("m.exr").exists(), "m.exr was written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_part_of_another_sampler_is_refused_naming_both() {
+    let dir = temp_dir!("sampler");
+    let (p1, p2) = (dir.join("independent.exr"), dir.join("sobol.exr"));
+    render(SCENE, 1, 4, &p1);
+    render_args(
+        SCENE,
+        2,
+        4,
+        &["--method", "path", "--sampler", "sobol"],
+        &p2,
+    );
+    let out = dir.join("m.exr");
+    let o = merge(&[p1, p2], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--sampler sobol") && stderr.contains("--sampler independent"),
+        "{stderr}"
+    );
+    assert!(!dir.join("m.exr").exists(), "m.exr was written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sobol_parts_merge_and_keep_their_sampler() {
+    let dir = temp_dir!("sobol");
+    let parts = [dir.join("a.exr"), dir.join("b.exr")];
+    for (seed, p) in [(1, &parts[0]), (2, &parts[1])] {
+        render_args(
+            SCENE,
+            seed,
+            4,
+            &["--method", "path", "--sampler", "sobol"],
+            p,
+        );
+    }
+    let out = dir.join("m.exr");
+    let o = merge(&parts, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read_exr(&out).unwrap().1.get("sampler"), Some("sobol"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -177,7 +177,8 @@ pub struct Merged {
     pub meta: Metadata,
 }
 
-/// Checks that the parts belong together (same scene, same size, distinct seeds) and merges
+/// Checks that the parts belong together (same scene, method, sampler and size, distinct seeds)
+/// and merges
 /// them; the argument order does not matter.
 pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
     parts.sort_by_key(|p| p.seed);
@@ -213,6 +214,17 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
                 method_of(p),
                 first.path.display(),
                 method_of(first)
+            )));
+        }
+        // Files written before `--sampler` existed drew independent numbers.
+        let sampler_of = |p: &Part| p.meta.get("sampler").unwrap_or("independent").to_string();
+        if sampler_of(p) != sampler_of(first) {
+            return Err(MergeError(format!(
+                "{}: rendered with --sampler {}, but {} with --sampler {}; merge only parts of                  one sampler (the merged file names one)",
+                p.path.display(),
+                sampler_of(p),
+                first.path.display(),
+                sampler_of(first)
             )));
         }
         if (p.mean.width, p.mean.height) != (w, h) {
@@ -279,6 +291,7 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
         "width",
         "height",
         "method",
+        "sampler",
     ] {
         if let Some(v) = first.meta.get(key) {
             meta.set(key, v);
