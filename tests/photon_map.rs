@@ -135,30 +135,8 @@ fn the_photon_map_same_streams_check_rejects_a_gpu_mirror_3_percent_too_dark() {
 fn a_photon_map_render_says_its_radius_is_fixed_and_refuses_alpha() {
     let dir = empty_temp_dir("photon-map-bias");
     let exr = dir.join("p.exr");
-    let render = |extra: &[&str]| {
-        hexray_command()
-            .args([
-                "render",
-                "scenes/tncg15_room.json",
-                "--method",
-                "photon-map",
-            ])
-            .args([
-                "--backend",
-                "cpu",
-                "--width",
-                "16",
-                "--height",
-                "16",
-                "--spp",
-                "2",
-            ])
-            .args(extra)
-            .arg("--out")
-            .arg(&exr)
-            .output()
-            .unwrap()
-    };
+    let render =
+        |extra: &[&str]| small_cli_render("scenes/tncg15_room.json", "photon-map", extra, &exr);
     let o = render(&[]);
     let log = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{log}");

@@ -443,23 +443,12 @@ fn the_radiosity_same_streams_check_rejects_direct_light_counted_twice() {
 fn a_radiosity_render_says_what_it_leaves_out() {
     let dir = empty_temp_dir("radiosity-omits");
     let exr = dir.join("r.exr");
-    let o = hexray_command()
-        .args(["render", "scenes/cornell_box.json", "--method", "radiosity"])
-        .args([
-            "--backend",
-            "cpu",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-        ])
-        .args(["--patch-size", "0.2", "--patch-rays", "64"])
-        .arg("--out")
-        .arg(&exr)
-        .output()
-        .unwrap();
+    let o = small_cli_render(
+        "scenes/cornell_box.json",
+        "radiosity",
+        &["--patch-size", "0.2", "--patch-rays", "64"],
+        &exr,
+    );
     let log = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{log}");
     assert!(

@@ -133,22 +133,7 @@ fn the_whitted_same_streams_check_rejects_a_gpu_mirror_3_percent_too_dark() {
 fn a_whitted_render_says_what_it_leaves_out() {
     let dir = empty_temp_dir("whitted-omits");
     let exr = dir.join("w.exr");
-    let o = hexray_command()
-        .args(["render", "scenes/tncg15_room.json", "--method", "whitted"])
-        .args([
-            "--backend",
-            "cpu",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-        ])
-        .arg("--out")
-        .arg(&exr)
-        .output()
-        .unwrap();
+    let o = small_cli_render("scenes/tncg15_room.json", "whitted", &[], &exr);
     let log = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{log}");
     assert!(

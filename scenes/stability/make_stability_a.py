@@ -222,8 +222,9 @@ def write(name, data):
         f.write("\n")
 
 
-write("mirror_corridor", mirror_corridor())
-write("thin_box", thin_box())
-write("thin_box_gap", thin_box_gap())
-write("thin_slab", thin_slab())
-write("grazing", grazing())
+if __name__ == "__main__":
+    write("mirror_corridor", mirror_corridor())
+    write("thin_box", thin_box())
+    write("thin_box_gap", thin_box_gap())
+    write("thin_slab", thin_slab())
+    write("grazing", grazing())

@@ -44,29 +44,8 @@ import os
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
-
-def quad(p0, p1, p2, p3, material, part):
-    """Two triangles (p0, p1, p2) and (p0, p2, p3); (p1 - p0) x (p2 - p0) is the front side."""
-    return [
-        {"v": [p0, p1, p2], "material": material, "part": part},
-        {"v": [p0, p2, p3], "material": material, "part": part},
-    ]
-
-
-def x_rect(x, y0, y1, z0, z1, material, part, facing):
-    """The rectangle x = const, y in [y0, y1], z in [z0, z1], front toward `facing` (+1 or -1)."""
-    a, b, c, d = [x, y0, z0], [x, y1, z0], [x, y1, z1], [x, y0, z1]
-    return quad(a, b, c, d, material, part) if facing > 0 else quad(a, d, c, b, material, part)
-
-
-def y_rect(y, x0, x1, z0, z1, material, part, facing):
-    a, b, c, d = [x0, y, z0], [x0, y, z1], [x1, y, z1], [x1, y, z0]
-    return quad(a, b, c, d, material, part) if facing > 0 else quad(a, d, c, b, material, part)
-
-
-def z_rect(z, x0, x1, y0, y1, material, part, facing):
-    a, b, c, d = [x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]
-    return quad(a, b, c, d, material, part) if facing > 0 else quad(a, d, c, b, material, part)
+# The quads and rectangles of make_stability_a.py, whose scenes are written only when it runs as a script.
+from make_stability_a import quad, x_rect, y_rect, z_rect  # noqa: E402
 
 
 def r6(p):

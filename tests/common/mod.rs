@@ -42,6 +42,25 @@ pub fn hexray_command() -> std::process::Command {
     c
 }
 
+/// `hexray render SCENE --method METHOD` on the CPU at 16x16 and 2 samples per pixel, with
+/// `extra` options, written to `out`: the small render whose summary line and metadata the
+/// tests of a method's command line read.
+pub fn small_cli_render(
+    scene: &str,
+    method: &str,
+    extra: &[&str],
+    out: &Path,
+) -> std::process::Output {
+    hexray_command()
+        .args(["render", scene, "--method", method, "--backend", "cpu"])
+        .args(["--width", "16", "--height", "16", "--spp", "2"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 /// An empty folder of this test process for `tag` (emptied if a run left it).
 pub fn empty_temp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("hexray-{tag}-{}", std::process::id()));
