@@ -144,14 +144,28 @@ fn finish_path(path: PathState) -> vec3<f32> {
 }
 
 // One invocation per pixel of the dispatch's tile: the frame's samples of that pixel, added to
-// the pass's sums.
+// the pass's sums. Under adaptive sampling (frame.run_count > 0), one invocation per pixel run
+// instead, the tile a grid of them row by row: the run's samples of its pixel.
 @compute @workgroup_size(8, 8, 1)
 fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.tile_size.x || gid.y >= frame.tile_size.y || frame.sample_count == 0u {
         return;
     }
-    let x = frame.tile_origin.x + gid.x;
-    let y = frame.tile_origin.y + gid.y;
+    var x = frame.tile_origin.x + gid.x;
+    var y = frame.tile_origin.y + gid.y;
+    var first = frame.first_sample;
+    var end = first + frame.sample_count;
+    if frame.run_count > 0u {
+        let i = gid.y * frame.tile_size.x + gid.x;
+        if i >= frame.run_count {
+            return;
+        }
+        let run = pixel_runs[frame.run_offset + i];
+        x = run.x % frame.camera.width;
+        y = run.x / frame.camera.width;
+        first = run.y;
+        end = run.y + run.z;
+    }
     let index = y * frame.camera.width + x;
     var sums = PixelSums();
     // Path regeneration (Novák et al., "GPU Computing: Interactive Path Tracing with Path
@@ -161,8 +175,7 @@ fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     // sample at once: measured with `examples/lane_occupancy.rs`, 16 samples a lane keep 85 %
     // of 8 lanes busy bounce by bounce where one sample at a time keeps 56 %. Each sample is
     // the same path as before (its own streams) and is added in sample order.
-    let end = frame.first_sample + frame.sample_count;
-    var s = frame.first_sample;
+    var s = first;
     var sampler = frame_sampler(index, s);
     var path = start_path(x, y, sampler);
     loop {

@@ -143,9 +143,11 @@ struct Frame {
     merge_reach: f32,
     // SAMPLER_INDEPENDENT or SAMPLER_SOBOL (`--sampler`, sampling.wgsl).
     sampler: u32,
+    // Adaptive sampling (path tracing): the dispatch covers pixel_runs[run_offset..][..run_count]
+    // instead of a tile of pixels (run_count 0: the tile, each pixel the frame's samples).
+    run_offset: u32,
+    run_count: u32,
     // To the 16-byte boundary of planar_mirrors.
-    pad2: u32,
-    pad3: u32,
     pad4: u32,
     // The scene's planar mirrors, for next-event estimation through them (BDPT).
     planar_mirrors: array<PlanarMirror, MAX_PLANAR_MIRRORS>,
@@ -189,3 +191,6 @@ const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 // bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/renderer/mod.rs).
 @group(0) @binding(6) var<uniform> frame: Frame;
 @group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;
+// Adaptive sampling's runs of the pass (`PixelRun`): a pixel's index, its first sample and how
+// many, and a word unused; read where frame.run_count is not 0.
+@group(0) @binding(8) var<storage, read> pixel_runs: array<vec4<u32>>;

@@ -128,8 +128,8 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             clearance_floor,
             merge_reach,
             sampler,
-            pad2,
-            pad3,
+            run_offset,
+            run_count,
             pad4,
             planar_mirrors
         }),

@@ -3,6 +3,7 @@
 //! profile's LTO, about half a minute each on 2 cores), so one binary instead of twenty keeps
 //! `cargo test --release` quick. Run one file's tests with a filter: `cargo test --release furnace::`.
 
+mod adaptive;
 mod bad_input;
 mod bdpt_references;
 mod bench;

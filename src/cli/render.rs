@@ -12,6 +12,7 @@ use hexray::gpu;
 use hexray::interrupt::StopRequest;
 use hexray::layout::FlatScene;
 use hexray::math::sampling::SamplerKind;
+use hexray::render::adaptive::{render_adaptive, AdaptiveSettings};
 use hexray::render::{render_progressive, Backend, Budget, CpuBackend, StopReason};
 use hexray::scene::Scene;
 use hexray::transport::camera::Camera;
@@ -118,6 +119,13 @@ pub(crate) struct RenderArgs {
     /// backends.
     #[arg(long, value_enum, default_value_t = SamplerKind::Independent)]
     pub(crate) sampler: SamplerKind,
+    /// Adaptive sampling (path tracing): after a uniform first eighth, rounds that each spend as
+    /// many samples as all before, given to the pixels in proportion to their estimated relative
+    /// error (a quarter spread evenly); each sample is weighted so that the image stays unbiased,
+    /// and --spp is then the mean over pixels (docs/sampling.md). It gains where the error is
+    /// concentrated (caustics seen directly), little where it is spread over the image.
+    #[arg(long)]
+    pub(crate) adaptive: bool,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub(crate) width: u32,
@@ -139,7 +147,7 @@ pub(crate) struct RenderArgs {
     /// seed, method, size and radius. The new samples continue the random streams, so on the
     /// CPU the result is bit for bit one uninterrupted render of the total. Writes over NAME.*
     /// unless --out says otherwise.
-    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "sampler", "width", "height", "method", "radius", "alpha", "light_samples", "patch_size", "patch_rays"])]
+    #[arg(long, value_name = "NAME.exr", conflicts_with_all = ["seed", "sampler", "adaptive", "width", "height", "method", "radius", "alpha", "light_samples", "patch_size", "patch_rays"])]
     pub(crate) resume: Option<PathBuf>,
     /// Also write the outputs (EXR, PNG, film) every SECONDS during the render, atomically, so
     /// that a job killed without warning (SIGKILL, a power cut) loses at most that much.
@@ -273,6 +281,7 @@ pub(crate) fn resume_from(exr: &Path, args: &mut RenderArgs) -> Result<(Film, Fi
     }
     args.seed = id.seed;
     args.sampler = id.sampler;
+    args.adaptive = id.adaptive;
     args.width = id.width;
     args.height = id.height;
     args.method = Some(
@@ -339,6 +348,7 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     }
     let out = output_path(args, &scene_path)?;
     check_light_samples(args, method)?;
+    check_adaptive(args, method)?;
     let budget = budget_of(args, method, before);
     check_memory(args, method)?;
 
@@ -584,6 +594,22 @@ fn radiosity_settings_of(
     Ok(settings)
 }
 
+/// --adaptive is path tracing's alone.
+fn check_adaptive(args: &RenderArgs, method: Method) -> Step<()> {
+    if args.adaptive && method != Method::Path {
+        let given = if args.method.is_none() {
+            " (the default method; add --method path)"
+        } else {
+            ""
+        };
+        return Err(refuse(format!(
+            "--adaptive is for --method path; {method}{given} spends the same samples on \
+             every pixel"
+        )));
+    }
+    Ok(())
+}
+
 /// --light-samples above 1 is path tracing's alone.
 fn check_light_samples(args: &RenderArgs, method: Method) -> Step<()> {
     if args.light_samples > 1 && method != Method::Path {
@@ -787,6 +813,9 @@ impl Record<'_> {
         meta.set("spp", film.spp());
         meta.set("seed", args.seed);
         meta.set("sampler", args.sampler);
+        if args.adaptive {
+            meta.set("adaptive", "true");
+        }
         meta.set("light_samples", args.light_samples);
         meta.set("method", method);
         meta.set("backend", self.backend);
@@ -817,6 +846,7 @@ impl Record<'_> {
             width: args.width,
             height: args.height,
             spp: film.spp(),
+            adaptive: args.adaptive,
             seed: args.seed,
             sampler: args.sampler,
             method: method.to_string(),
@@ -850,7 +880,7 @@ fn render_with_checkpoints(
     let pixels = u64::from(args.width) * u64::from(args.height);
     let mut progress = Progress::new(args.quiet, budget, before, pixels);
     let mut last_checkpoint = 0.0;
-    let report = render_progressive(backend, film, budget, stop.flag(), |film, spp, secs| {
+    let on_pass = |film: &Film, spp, secs| {
         let estimate = budget.relmse.and_then(|_| film.estimated_relmse());
         progress.update(spp, secs, estimate);
         if args
@@ -863,7 +893,13 @@ fn render_with_checkpoints(
                 progress.println(&format!("hexray: warning: checkpoint not written: {e:#}"));
             }
         }
-    });
+    };
+    let report = if args.adaptive {
+        let settings = AdaptiveSettings::default();
+        render_adaptive(backend, film, budget, settings, stop.flag(), on_pass)
+    } else {
+        render_progressive(backend, film, budget, stop.flag(), on_pass)
+    };
     progress.finish();
     report
 }

@@ -15,7 +15,7 @@ use crate::transport::faults::Faults;
 pub use path::trace_path;
 
 use crate::accel::hash_grid::{entry_index, HashGrid};
-use crate::film::{Film, PixelStats};
+use crate::film::{Film, PixelRun, PixelStats};
 use crate::layout::FlatScene;
 use crate::math::sampling::{Sampler, SamplerKind};
 use crate::transport::camera::Camera;
@@ -94,6 +94,73 @@ pub fn render_pass_until(
             rays,
         )
     })
+}
+
+/// Adds adaptive sampling's runs of path tracing to `film` (`crate::render::adaptive`): the
+/// runs of each tile's pixels traced together (`path_wavefront::trace_pixel_samples`), each
+/// added to its pixel with the run's weight. `stop` drops the pass whole, as
+/// [`render_pass_until`]'s. Returns the number of rays traced.
+#[allow(clippy::too_many_arguments)]
+pub fn render_path_runs_until(
+    scene: &FlatScene,
+    camera: &Camera,
+    seed: u32,
+    runs: &[PixelRun],
+    light_samples: u32,
+    faults: Faults,
+    film: &mut Film,
+    stop: &AtomicBool,
+) -> u64 {
+    let (kind, w) = (film.sampler, film.width);
+    let tile_of = |r: &PixelRun| {
+        let (x, y) = (r.pixel % w, r.pixel / w);
+        (y / TILE) * w.div_ceil(TILE) + x / TILE
+    };
+    let mut order: Vec<&PixelRun> = runs.iter().collect();
+    order.sort_by_key(|r| (tile_of(r), r.pixel));
+    let tiles: Vec<&[&PixelRun]> = order.chunk_by(|a, b| tile_of(a) == tile_of(b)).collect();
+    let traced: Vec<(Vec<PixelStats>, u64)> = tiles
+        .par_iter()
+        .map(|tile| {
+            if stop.load(Ordering::Relaxed) {
+                return (Vec::new(), 0);
+            }
+            let pixels: Vec<(u32, u32, u32)> = tile
+                .iter()
+                .map(|r| (r.pixel, r.pixel % w, r.pixel / w))
+                .collect();
+            let mut stats = vec![PixelStats::default(); tile.len()];
+            let mut rays = 0;
+            path_wavefront::trace_pixel_samples(
+                scene,
+                camera,
+                &pixels,
+                |p| tile[p].first..tile[p].first + tile[p].count,
+                kind,
+                seed,
+                light_samples,
+                faults,
+                &mut stats,
+                &mut rays,
+            );
+            (stats, rays)
+        })
+        .collect();
+    let rays = traced.iter().map(|(_, r)| r).sum();
+    if stop.load(Ordering::SeqCst) {
+        return rays;
+    }
+    for (tile, (stats, _)) in tiles.iter().zip(&traced) {
+        for (run, batch) in tile.iter().zip(stats) {
+            let weight = if faults.adaptive_pooled {
+                1.0
+            } else {
+                run.weight
+            };
+            film.pixels[run.pixel as usize].merge_weighted(batch, weight);
+        }
+    }
+    rays
 }
 
 /// Adds samples `first..first + count` of Whitted ray tracing (`whitted::trace_whitted`) to

@@ -46,11 +46,37 @@ pub fn trace_pixels(
     stats: &mut [PixelStats],
     rays: &mut u64,
 ) {
+    let samples = |_| first..first + count;
+    trace_pixel_samples(
+        scene,
+        camera,
+        pixels,
+        samples,
+        kind,
+        seed,
+        light_samples,
+        faults,
+        stats,
+        rays,
+    );
+}
+
+/// [`trace_pixels`] with each pixel's own samples: `samples(p)` for `pixels[p]` (adaptive
+/// sampling's runs, `crate::render::adaptive`), in the same wavefront.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_pixel_samples(
+    scene: &FlatScene,
+    camera: &Camera,
+    pixels: &[(u32, u32, u32)],
+    samples: impl Fn(usize) -> std::ops::Range<u32>,
+    kind: SamplerKind,
+    seed: u32,
+    light_samples: u32,
+    faults: Faults,
+    stats: &mut [PixelStats],
+    rays: &mut u64,
+) {
     assert_eq!(pixels.len(), stats.len());
-    if count == 0 {
-        return;
-    }
-    let end = first + count;
     let start = |slot: &mut Slot, l: usize, p: usize, sample: u32| {
         let (index, x, y) = pixels[p];
         let path = start_path(camera, x, y, &Sampler::of(kind, seed, index, sample));
@@ -61,11 +87,21 @@ pub fn trace_pixels(
         slot.live |= 1 << l;
     };
     let mut slot = Slot::default();
-    // The next of the tile's pixels no lane has taken yet.
+    // The next of the tile's pixels no lane has taken yet, past those with no samples.
     let mut next = 0;
-    for l in 0..LANES.min(pixels.len()) {
-        start(&mut slot, l, next, first);
-        next += 1;
+    let take_next = |slot: &mut Slot, l: usize, next: &mut usize| {
+        while *next < pixels.len() {
+            let p = *next;
+            *next += 1;
+            let range = samples(p);
+            if !range.is_empty() {
+                start(slot, l, p, range.start);
+                return;
+            }
+        }
+    };
+    for l in 0..LANES {
+        take_next(&mut slot, l, &mut next);
     }
     // The shadow rays of the hits shaded one by one, each with its lane.
     let (mut events, mut event_lanes, mut shadow_rays, mut blocked) =
@@ -146,11 +182,10 @@ pub fn trace_pixels(
             stats[p].add(finish_path(&slot.path(l)));
             let sample = slot.sample.as_array()[l] + 1;
             slot.live &= !(1 << l);
-            if sample < end {
+            if sample < samples(p).end {
                 start(&mut slot, l, p, sample);
-            } else if next < pixels.len() {
-                start(&mut slot, l, next, first);
-                next += 1;
+            } else {
+                take_next(&mut slot, l, &mut next);
             }
         }
     }

@@ -13,7 +13,8 @@
 //! - the magic `hexray film\n` (12 bytes), a u32 header length, the header as JSON
 //!   ([`FilmIdentity`]);
 //! - per pixel, row 0 first: sum[3] f64, sum_sq[3] f64, n u64, dropped u64, even_sum[3] f64,
-//!   even_n u64 (96 bytes; version 1 ends each record before even_sum, at 64 bytes);
+//!   even_n u64, w f64, w_sq f64, even_w f64 (120 bytes; version 2 ends each record before w,
+//!   at 96 bytes, and version 1 before even_sum, at 64 bytes);
 //! - for the batch-means methods, one more such record: the iterations' image means.
 //!
 //! The reader checks that the file is exactly as long as its header says before allocating
@@ -28,7 +29,9 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 12] = b"hexray film\n";
 /// Bytes of one pixel record.
-const RECORD: usize = 96;
+const RECORD: usize = 120;
+/// Bytes of one pixel record of version 2, which lacks the weight sums.
+const RECORD_V2: usize = 96;
 /// Bytes of one pixel record of version 1, which lacks the even-sample sums.
 const RECORD_V1: usize = 64;
 /// The longest header read (a header is a few hundred bytes).
@@ -44,8 +47,12 @@ pub struct FilmIdentity {
     pub version: u32,
     pub width: u32,
     pub height: u32,
-    /// Samples per pixel in the film (accumulated + dropped).
+    /// Samples per pixel in the film (accumulated + dropped); under adaptive sampling, pixel
+    /// counts differ and this is their mean, rounded down.
     pub spp: u64,
+    /// Whether the samples were spent adaptively (`--adaptive`): each pixel has its own count.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub adaptive: bool,
     pub seed: u32,
     /// `--method`, as written on the command line.
     pub method: String,
@@ -76,8 +83,9 @@ pub struct FilmIdentity {
 }
 
 impl FilmIdentity {
-    /// Version 2 added each record's even-sample sums (`PixelStats::even_sum`, `even_n`).
-    pub const VERSION: u32 = 2;
+    /// Version 2 added each record's even-sample sums (`PixelStats::even_sum`, `even_n`),
+    /// version 3 the weight sums (`PixelStats::w`, `w_sq`, `even_w`).
+    pub const VERSION: u32 = 3;
 }
 
 /// `NAME.film` beside `NAME.exr`.
@@ -95,22 +103,35 @@ fn put_record(out: &mut Vec<u8>, p: &PixelStats) {
         out.extend_from_slice(&v.to_le_bytes());
     }
     out.extend_from_slice(&p.even_n.to_le_bytes());
+    for v in [p.w, p.w_sq, p.even_w] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
 }
 
 fn get_record(b: &[u8]) -> PixelStats {
     let f = |i: usize| f64::from_le_bytes(b[8 * i..8 * i + 8].try_into().unwrap());
     let u = |i: usize| u64::from_le_bytes(b[8 * i..8 * i + 8].try_into().unwrap());
+    let (n, even_n) = (u(6), if b.len() >= RECORD_V2 { u(11) } else { 0 });
+    // Before version 3 every weight was 1.
+    let weights = if b.len() == RECORD {
+        [f(12), f(13), f(14)]
+    } else {
+        [n as f64, n as f64, even_n as f64]
+    };
     PixelStats {
         sum: [f(0), f(1), f(2)],
         sum_sq: [f(3), f(4), f(5)],
-        n: u(6),
+        n,
         dropped: u(7),
-        even_sum: if b.len() == RECORD {
+        even_sum: if b.len() >= RECORD_V2 {
             [f(8), f(9), f(10)]
         } else {
             [0.0; 3]
         },
-        even_n: if b.len() == RECORD { u(11) } else { 0 },
+        even_n,
+        w: weights[0],
+        w_sq: weights[1],
+        even_w: weights[2],
     }
 }
 
@@ -166,14 +187,19 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
     let id: FilmIdentity =
         serde_json::from_slice(&header).with_context(|| format!("{name}: unreadable header"))?;
     // Version 1 lacks the even-sample sums, which only the Sobol sampler's error estimate
-    // uses; every film of version 1 was drawn by the independent sampler.
+    // uses; every film of version 1 was drawn by the independent sampler. Versions 1 and 2
+    // lack the weight sums: their samples all weigh 1.
     ensure!(
-        id.version == FilmIdentity::VERSION || id.version == 1,
-        "{name}: film format version {} (this hexray reads versions 1 and {})",
+        (1..=FilmIdentity::VERSION).contains(&id.version),
+        "{name}: film format version {} (this hexray reads versions 1 to {})",
         id.version,
         FilmIdentity::VERSION
     );
-    let record = if id.version == 1 { RECORD_V1 } else { RECORD };
+    let record = match id.version {
+        1 => RECORD_V1,
+        2 => RECORD_V2,
+        _ => RECORD,
+    };
     ensure!(
         (1..=MAX_SIDE).contains(&id.width) && (1..=MAX_SIDE).contains(&id.height),
         "{name}: image size {}x{} is out of range",
@@ -201,7 +227,7 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
     let mut film = Film::new(id.width, id.height).with_sampler(id.sampler);
     for (i, p) in film.pixels.iter_mut().enumerate() {
         *p = records.next().unwrap();
-        check_record(p, id.spp).with_context(|| {
+        check_record(p, (!id.adaptive).then_some(id.spp)).with_context(|| {
             format!(
                 "{name}: pixel ({}, {})",
                 i % id.width as usize,
@@ -221,20 +247,33 @@ pub fn read(path: &Path) -> Result<(Film, FilmIdentity)> {
     Ok((film, id))
 }
 
-fn check_record(p: &PixelStats, spp: u64) -> Result<()> {
-    ensure!(
-        p.n.checked_add(p.dropped) == Some(spp),
-        "{} + {} dropped samples, not the header's {spp}",
-        p.n,
-        p.dropped
-    );
+/// A pixel's record: `spp` samples where every pixel has as many (not so under adaptive
+/// sampling), finite sums, positive weights where there are samples.
+fn check_record(p: &PixelStats, spp: Option<u64>) -> Result<()> {
+    if let Some(spp) = spp {
+        ensure!(
+            p.n.checked_add(p.dropped) == Some(spp),
+            "{} + {} dropped samples, not the header's {spp}",
+            p.n,
+            p.dropped
+        );
+    }
     ensure!(
         p.sum
             .iter()
             .chain(&p.sum_sq)
             .chain(&p.even_sum)
+            .chain(&[p.w, p.w_sq, p.even_w])
             .all(|v| v.is_finite()),
         "a sum is not finite"
+    );
+    ensure!(
+        (p.n == 0 || p.w > 0.0 && p.w_sq > 0.0) && p.even_w >= 0.0 && p.even_w <= p.w,
+        "weight sums {}, {}, {} do not fit {} samples",
+        p.w,
+        p.w_sq,
+        p.even_w,
+        p.n
     );
     ensure!(
         p.even_n <= p.n,
@@ -264,6 +303,7 @@ mod tests {
             width,
             height,
             spp,
+            adaptive: false,
             seed: 7,
             sampler: SamplerKind::Sobol,
             method: method.into(),
@@ -315,34 +355,43 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
-    /// A film of version 1 (records without the even-sample sums, no sampler in the header)
-    /// still reads: its sums as written, the independent sampler.
+    /// Films of versions 1 (records without the even-sample sums, no sampler in the header)
+    /// and 2 (without the weight sums) still read: their sums as written, every weight 1,
+    /// version 1 drawn by the independent sampler.
     #[test]
-    fn a_version_1_film_still_reads() {
-        let dir = std::env::temp_dir().join(format!("hexray-film-v1-{}", std::process::id()));
-        let path = dir.join("v1.film");
-        let f = film(3, 2, 5, false);
-        let mut id = serde_json::to_value(identity(3, 2, 5)).unwrap();
-        id["version"] = 1.into();
-        id.as_object_mut().unwrap().remove("sampler");
-        let header = serde_json::to_vec(&id).unwrap();
-        let mut bytes = MAGIC.to_vec();
-        bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(&header);
-        for p in &f.pixels {
-            let mut record = Vec::new();
-            put_record(&mut record, p);
-            bytes.extend_from_slice(&record[..RECORD_V1]);
-        }
+    fn films_of_versions_1_and_2_still_read() {
+        let dir = std::env::temp_dir().join(format!("hexray-film-old-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(&path, &bytes).unwrap();
-        let (g, id) = read(&path).unwrap();
-        assert_eq!((id.version, g.sampler), (1, SamplerKind::Independent));
-        for (a, b) in f.pixels.iter().zip(&g.pixels) {
-            assert_eq!(
-                (a.sum, a.sum_sq, a.n, a.dropped),
-                (b.sum, b.sum_sq, b.n, b.dropped)
-            );
+        for (version, record_len) in [(1, RECORD_V1), (2, RECORD_V2)] {
+            let path = dir.join(format!("v{version}.film"));
+            let f = film(3, 2, 5, false);
+            let mut id = serde_json::to_value(identity(3, 2, 5)).unwrap();
+            id["version"] = version.into();
+            if version == 1 {
+                id.as_object_mut().unwrap().remove("sampler");
+            }
+            let header = serde_json::to_vec(&id).unwrap();
+            let mut bytes = MAGIC.to_vec();
+            bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
+            bytes.extend_from_slice(&header);
+            for p in &f.pixels {
+                let mut record = Vec::new();
+                put_record(&mut record, p);
+                bytes.extend_from_slice(&record[..record_len]);
+            }
+            std::fs::write(&path, &bytes).unwrap();
+            let (g, id) = read(&path).unwrap();
+            assert_eq!(id.version, version);
+            if version == 1 {
+                assert_eq!(g.sampler, SamplerKind::Independent);
+            }
+            for (a, b) in f.pixels.iter().zip(&g.pixels) {
+                assert_eq!(
+                    (a.sum, a.sum_sq, a.n, a.dropped, a.w, a.w_sq),
+                    (b.sum, b.sum_sq, b.n, b.dropped, b.w, b.w_sq)
+                );
+                assert_eq!(b.mean(), a.mean());
+            }
         }
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -4,6 +4,11 @@
 //! A pixel's estimate is the sample mean m = Σx / n, and the variance of that mean is estimated
 //! without bias by (Σx² − (Σx)²/n) / (n (n − 1)). Sums are kept in f64: at 10^5 samples an f32
 //! sum has lost about 17 of its 24 bits to the magnitude of the running total.
+//!
+//! Adaptive sampling (`crate::render::adaptive`) gives each sample a weight c fixed before the
+//! sample is drawn; the estimate is then the weighted mean m = Σcx / Σc, and the sums are of cx
+//! and (cx)², with Σc and Σc² beside them. Unweighted samples have c = 1, where every formula
+//! below is the plain one.
 
 use crate::math::sampling::SamplerKind;
 use glam::Vec3;
@@ -28,6 +33,11 @@ pub struct PixelStats {
     /// [`PixelStats::var_of_mean_from_streams`] estimates the mean's error.
     pub even_sum: [f64; 3],
     pub even_n: u64,
+    /// The sums of the accumulated samples' weights (Σc, Σc²) and of the even-index ones'
+    /// (equal to n, n and even_n where every weight is 1).
+    pub w: f64,
+    pub w_sq: f64,
+    pub even_w: f64,
 }
 
 impl PixelStats {
@@ -51,39 +61,59 @@ impl PixelStats {
         }
         self.n += 1;
         self.even_n += u64::from(even);
+        self.w += 1.0;
+        self.w_sq += 1.0;
+        self.even_w += f64::from(u8::from(even));
     }
 
     /// Folds in another set of sums (a later batch of samples of the same pixel).
     #[inline]
     pub fn merge(&mut self, o: &PixelStats) {
-        for c in 0..3 {
-            self.sum[c] += o.sum[c];
-            self.sum_sq[c] += o.sum_sq[c];
+        self.merge_weighted(o, 1.0);
+    }
+
+    /// Folds in a later batch of samples of the same pixel, each weighted by `c` (adaptive
+    /// sampling's fixed weight of the batch's samples): Σx becomes Σcx, Σx² becomes Σ(cx)².
+    /// The batch must start at an even sample index (its even samples are then the pixel's).
+    #[inline]
+    pub fn merge_weighted(&mut self, o: &PixelStats, c: f64) {
+        for k in 0..3 {
+            self.sum[k] += c * o.sum[k];
+            self.sum_sq[k] += c * c * o.sum_sq[k];
+            self.even_sum[k] += c * o.even_sum[k];
         }
         self.n += o.n;
         self.dropped += o.dropped;
-        for c in 0..3 {
-            self.even_sum[c] += o.even_sum[c];
-        }
         self.even_n += o.even_n;
+        self.w += c * o.w;
+        self.w_sq += c * c * o.w_sq;
+        self.even_w += c * o.even_w;
     }
 
+    /// The (weighted) mean Σcx / Σc.
     pub fn mean(&self) -> [f64; 3] {
-        if self.n == 0 {
+        if self.n == 0 || self.w <= 0.0 {
             return [0.0; 3];
         }
-        self.sum.map(|s| s / self.n as f64)
+        self.sum.map(|s| s / self.w)
     }
 
-    /// The estimated variance of the mean (the squared standard error), per channel.
+    /// The estimated variance of the mean (the squared standard error), per channel. For
+    /// weighted samples of one variance σ², Var(Σcx / Σc) = σ² Σc² / (Σc)², and
+    /// (Σ(cx)² − m² Σc²) / (Σc)² estimates it times (1 − 1 / n_eff), n_eff = (Σc)² / Σc²; with
+    /// every c = 1 this is (Σx² − (Σx)²/n) / (n (n − 1)).
     pub fn var_of_mean(&self) -> [f64; 3] {
-        if self.n < 2 {
+        if self.n < 2 || self.w <= 0.0 {
             return [0.0; 3];
         }
-        let n = self.n as f64;
+        let (w, w_sq) = (self.w, self.w_sq);
+        let n_eff = w * w / w_sq;
+        if n_eff <= 1.0 {
+            return [0.0; 3];
+        }
         std::array::from_fn(|c| {
-            let ss = self.sum_sq[c] - self.sum[c] * self.sum[c] / n;
-            ss.max(0.0) / (n * (n - 1.0))
+            let ss = self.sum_sq[c] - self.sum[c] * self.sum[c] * w_sq / (w * w);
+            ss.max(0.0) / (w * w) * n_eff / (n_eff - 1.0)
         })
     }
 
@@ -93,18 +123,28 @@ impl PixelStats {
     /// falls as one over its count (and exactly (e − o)² / 4 for equal counts, whatever the
     /// rate). One degree of freedom per pixel: right on average over many pixels (an image's
     /// error), too rough to judge one pixel by. Zero before one sample in each stream.
+    /// Weighted samples (adaptive sampling) take each stream's weight sum for its count.
     pub fn var_of_mean_from_streams(&self) -> [f64; 3] {
-        let (ne, no) = (self.even_n, self.n - self.even_n);
-        if ne == 0 || no == 0 {
+        if self.even_n == 0 || self.n == self.even_n {
             return [0.0; 3];
         }
-        let (ne, no, n) = (ne as f64, no as f64, self.n as f64);
+        let (ne, no, n) = (self.even_w, self.w - self.even_w, self.w);
         std::array::from_fn(|c| {
             let e = self.even_sum[c] / ne;
             let o = (self.sum[c] - self.even_sum[c]) / no;
             (e - o) * (e - o) * ne * no / (n * n)
         })
     }
+}
+
+/// One pixel's samples in a pass of adaptive sampling (`crate::render::adaptive`): samples
+/// `first..first + count` of pixel `pixel` (its index, row-major), each weighing `weight`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelRun {
+    pub pixel: u32,
+    pub first: u32,
+    pub count: u32,
+    pub weight: f64,
 }
 
 /// The relMSE denominator's offset, mean (x − r)² / (r² + 0.01): keeps dark pixels from
@@ -169,9 +209,16 @@ impl Film {
         }
     }
 
-    /// Samples per pixel taken so far (accumulated + dropped), the same for every pixel.
+    /// Samples per pixel taken so far (accumulated + dropped): the same for every pixel but
+    /// under adaptive sampling, where this is their mean, rounded ([`Film::mean_spp`]).
     pub fn spp(&self) -> u64 {
-        self.pixels.first().map_or(0, |p| p.n + p.dropped)
+        self.mean_spp().round() as u64
+    }
+
+    /// Samples per pixel taken so far, on average over the pixels.
+    pub fn mean_spp(&self) -> f64 {
+        let total: u64 = self.pixels.iter().map(|p| p.n + p.dropped).sum();
+        total as f64 / self.pixels.len().max(1) as f64
     }
 
     pub fn dropped(&self) -> u64 {
@@ -272,5 +319,29 @@ mod tests {
         p.add(Vec3::new(0.0, f32::INFINITY, 0.0));
         assert_eq!((p.n, p.dropped), (1, 2));
         assert_eq!(p.mean(), [1.0; 3]);
+    }
+
+    /// Weighted batches: the mean is Σcx / Σc, and the variance estimate is unbiased for
+    /// samples of one variance (checked here on exact sums: two batches of constant values
+    /// have the plain formula's variance once the weights are equal).
+    #[test]
+    fn weighted_batches_give_the_weighted_mean_and_the_plain_variance_at_equal_weights() {
+        let batch = |xs: &[f32]| {
+            let mut b = PixelStats::default();
+            for &x in xs {
+                b.add(Vec3::splat(x));
+            }
+            b
+        };
+        let mut p = PixelStats::default();
+        p.merge_weighted(&batch(&[1.0, 3.0]), 2.0);
+        p.merge_weighted(&batch(&[5.0, 7.0, 9.0, 11.0]), 0.5);
+        // (2 (1 + 3) + 0.5 (5 + 7 + 9 + 11)) / (2 · 2 + 0.5 · 4) = 24 / 6.
+        assert!((p.mean()[0] - 4.0).abs() < 1e-12);
+        let mut q = PixelStats::default();
+        q.merge_weighted(&batch(&[1.0, 2.0]), 3.0);
+        q.merge_weighted(&batch(&[3.0, 4.0]), 3.0);
+        assert!((q.var_of_mean()[0] - 5.0 / 12.0).abs() < 1e-12);
+        assert!((q.mean()[0] - 2.5).abs() < 1e-12);
     }
 }

@@ -204,6 +204,14 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
                 first.meta.get("scene").unwrap_or("?"),
             )));
         }
+        // An adaptive render's pixels have counts of their own, which the EXR does not hold.
+        if p.meta.get("adaptive") == Some("true") {
+            return Err(MergeError(format!(
+                "{}: rendered with --adaptive, whose pixels each took their own number of \
+                 samples; merge only parts rendered without it",
+                p.path.display()
+            )));
+        }
         // Files written before `--method` existed are path-traced.
         let method_of = |p: &Part| p.meta.get("method").unwrap_or("path").to_string();
         if method_of(p) != method_of(first) {
@@ -220,7 +228,8 @@ pub fn merge(mut parts: Vec<Part>) -> Result<Merged, MergeError> {
         let sampler_of = |p: &Part| p.meta.get("sampler").unwrap_or("independent").to_string();
         if sampler_of(p) != sampler_of(first) {
             return Err(MergeError(format!(
-                "{}: rendered with --sampler {}, but {} with --sampler {}; merge only parts of                  one sampler (the merged file names one)",
+                "{}: rendered with --sampler {}, but {} with --sampler {}; merge only parts of \
+                 one sampler (the merged file names one)",
                 p.path.display(),
                 sampler_of(p),
                 first.path.display(),

@@ -84,9 +84,12 @@ pub struct Frame {
     pub merge_reach: f32,
     /// `SamplerKind::code` of the film's sampler (`--sampler`).
     pub sampler: u32,
+    /// Adaptive sampling (path tracing): the dispatch covers runs `run_offset..run_offset +
+    /// run_count` of the pixel runs buffer instead of a tile (0: the tile, each pixel the
+    /// frame's samples).
+    pub run_offset: u32,
+    pub run_count: u32,
     /// To the 16-byte boundary of `planar_mirrors`.
-    pub pad2: u32,
-    pub pad3: u32,
     pub pad4: u32,
     /// The scene's planar mirrors, for next-event estimation through them (BDPT).
     pub planar_mirrors: [PlanarMirror; MAX_PLANAR_MIRRORS as usize],
@@ -158,8 +161,8 @@ impl Frame {
             clearance_floor: crate::transport::merging::CLEARANCE_FLOOR,
             merge_reach: 0.0,
             sampler: 0,
-            pad2: 0,
-            pad3: 0,
+            run_offset: 0,
+            run_count: 0,
             pad4: 0,
             planar_mirrors: std::array::from_fn(|i| {
                 scene.planar_mirrors.get(i).copied().unwrap_or_default()
@@ -180,6 +183,24 @@ pub struct PixelSums {
     /// The sum and count of the finite samples of even index (`PixelStats::even_sum`).
     pub even_sum: [f32; 3],
     pub even_n: f32,
+}
+
+impl PixelSums {
+    /// The pass's sums in f64, as one batch of unweighted samples.
+    pub fn stats(&self) -> crate::film::PixelStats {
+        let f = |v: [f32; 3]| v.map(f64::from);
+        crate::film::PixelStats {
+            sum: f(self.sum),
+            sum_sq: f(self.sum_sq),
+            n: self.n as u64,
+            dropped: self.dropped as u64,
+            even_sum: f(self.even_sum),
+            even_n: self.even_n as u64,
+            w: self.n as f64,
+            w_sq: self.n as f64,
+            even_w: self.even_n as f64,
+        }
+    }
 }
 
 /// Workgroup size of the kernel (8 x 8, `@workgroup_size` in `shaders/path.wgsl`).

@@ -51,6 +51,8 @@ pub fn scene_arrays(scene: &FlatScene) -> [(&'static str, usize); 6] {
 
 /// Bytes of one pixel's pass sums on the device.
 pub(super) const PIXEL_SUMS_BYTES: u64 = std::mem::size_of::<PixelSums>() as u64;
+/// Bytes of one pixel run in the runs buffer (`pixel_runs` in `shaders/scene.wgsl`).
+pub(super) const PIXEL_RUN_BYTES: u64 = 16;
 
 /// The largest buffer the device binds as storage.
 pub(super) fn largest_binding(limits: &wgpu::Limits) -> u64 {

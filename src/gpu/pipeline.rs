@@ -91,7 +91,7 @@ pub(super) fn buffer_entries<'a>(
 }
 
 /// The bindings of `shaders/scene.wgsl`: the six scene arrays (storage or uniform), the frame
-/// (uniform), the pass sums (read-write storage).
+/// (uniform), the pass sums (read-write storage), adaptive sampling's pixel runs (storage).
 pub(super) fn bind_group_layout(
     device: &wgpu::Device,
     residency: Residency,
@@ -114,6 +114,10 @@ pub(super) fn bind_group_layout(
     let mut entries: Vec<_> = (0..6).map(|b| buffer(b, scene_array)).collect();
     entries.push(buffer(6, wgpu::BufferBindingType::Uniform));
     entries.push(buffer(7, read_write));
+    entries.push(buffer(
+        8,
+        wgpu::BufferBindingType::Storage { read_only: true },
+    ));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("scene"),
         entries: &entries,

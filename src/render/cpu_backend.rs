@@ -91,6 +91,34 @@ impl Backend for CpuBackend<'_> {
         }
         out
     }
+    fn adaptive_pass_until(
+        &mut self,
+        runs: &[super::adaptive::PixelRun],
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            self.method == crate::transport::method::Method::Path,
+            "adaptive sampling is available for path tracing only, not {}",
+            self.method
+        );
+        check_film_for(self.method, film)?;
+        let (scene, camera, seed, faults) = (self.scene, &self.camera, self.seed, self.faults);
+        let light_samples = self.light_samples;
+        self.rays += self.pool.install(|| {
+            crate::cpu::render_path_runs_until(
+                scene,
+                camera,
+                seed,
+                runs,
+                light_samples,
+                faults,
+                film,
+                stop,
+            )
+        });
+        Ok(())
+    }
     fn pass_until(
         &mut self,
         first: u32,

@@ -27,6 +27,14 @@ impl Backend for GpuBackend {
     ) -> anyhow::Result<()> {
         self.renderer.render_until(first, count, film, stop)
     }
+    fn adaptive_pass_until(
+        &mut self,
+        runs: &[super::adaptive::PixelRun],
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
+        self.renderer.adaptive_pass_until(runs, film, stop)
+    }
     fn provenance(&self) -> Vec<(&'static str, String)> {
         self.renderer.provenance()
     }

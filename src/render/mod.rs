@@ -6,6 +6,7 @@ use crate::film::Film;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+pub mod adaptive;
 mod cpu_backend;
 mod gpu_backend;
 
@@ -28,6 +29,18 @@ pub trait Backend {
         film: &mut Film,
         stop: &AtomicBool,
     ) -> anyhow::Result<()>;
+    /// Adds each run's samples to its pixel, weighted by the run's weight (adaptive sampling,
+    /// [`adaptive`]), until `stop` is set: a backend stopped under way drops the pass whole.
+    /// Backends and methods without adaptive sampling refuse.
+    fn adaptive_pass_until(
+        &mut self,
+        runs: &[adaptive::PixelRun],
+        film: &mut Film,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<()> {
+        let _ = (runs, film, stop);
+        anyhow::bail!("adaptive sampling is not available on this backend for this method")
+    }
     /// The whole pass: [`Backend::pass_until`] with no stop.
     fn pass(&mut self, first: u32, count: u32, film: &mut Film) -> anyhow::Result<()> {
         self.pass_until(first, count, film, &AtomicBool::new(false))
@@ -105,40 +118,11 @@ pub fn render_progressive(
         if budget.seconds.is_some_and(|s| elapsed >= s) {
             break StopReason::TimeBudget;
         }
-        // The error target: were relMSE to fall as 1 / n, the samples it needs would be about
-        // n · (estimate / target − 1) more. It falls faster under the Sobol sampler, so the pass
-        // takes half of those, and the render closes in on the target rather than overshoot it.
-        let mut needed = None;
-        if let Some(target) = budget.relmse {
-            if film.spp() < MIN_SAMPLES_FOR_TARGET {
-                needed = Some((MIN_SAMPLES_FOR_TARGET - film.spp()) as u32);
-            } else {
-                let estimate = film.estimated_relmse().unwrap_or(f64::INFINITY);
-                if estimate <= target {
-                    break StopReason::ErrorTarget;
-                }
-                let more = (done as f64 * (estimate / target - 1.0) / 2.0).ceil();
-                needed = Some(more.clamp(1.0, u32::MAX as f64) as u32);
-            }
-        }
-        // Size the pass from the measured cost of a sample per pixel: one sample first, then
-        // as many as fit in the target duration and in what remains of the budget.
-        let mut count = match per_spp {
-            None => 1,
-            Some(c) => {
-                let mut secs = TARGET_PASS_SECONDS;
-                if let Some(s) = budget.seconds {
-                    secs = secs.min(s - elapsed);
-                }
-                ((secs / c).floor() as u32).max(1)
-            }
+        let needed = match error_target(film, budget, done) {
+            ErrorTarget::Reached => break StopReason::ErrorTarget,
+            ErrorTarget::Needs(n) => n,
         };
-        if let Some(t) = target {
-            count = count.min(t - done);
-        }
-        if let Some(n) = needed {
-            count = count.min(n);
-        }
+        let count = pass_size(per_spp, budget, elapsed, target.map(|t| t - done), needed);
         let t0 = Instant::now();
         let before = film.spp();
         if let Err(e) = backend.pass_until(done, count, film, stop) {
@@ -165,6 +149,61 @@ pub fn render_progressive(
         seconds: start.elapsed().as_secs_f64(),
         reason,
     }
+}
+
+/// Where a render stands against its error target.
+enum ErrorTarget {
+    Reached,
+    /// Not reached (or none set): at most this many more samples per pixel in the next pass.
+    Needs(Option<u32>),
+}
+
+/// The error target: were relMSE to fall as 1 / n, the samples it needs would be about
+/// n · (estimate / target − 1) more, `done` = n samples per pixel so far. It falls faster under
+/// the Sobol sampler, so the pass takes half of those, and the render closes in on the target
+/// rather than overshoot it. Looked at from [`MIN_SAMPLES_FOR_TARGET`] samples per pixel on.
+fn error_target(film: &Film, budget: Budget, done: u32) -> ErrorTarget {
+    let Some(target) = budget.relmse else {
+        return ErrorTarget::Needs(None);
+    };
+    if (done as u64) < MIN_SAMPLES_FOR_TARGET {
+        return ErrorTarget::Needs(Some(MIN_SAMPLES_FOR_TARGET as u32 - done));
+    }
+    let estimate = film.estimated_relmse().unwrap_or(f64::INFINITY);
+    if estimate <= target {
+        return ErrorTarget::Reached;
+    }
+    let more = (done as f64 * (estimate / target - 1.0) / 2.0).ceil();
+    ErrorTarget::Needs(Some(more.clamp(1.0, u32::MAX as f64) as u32))
+}
+
+/// Samples per pixel of the next pass, from the measured cost of one (`per_spp` seconds): one
+/// first, then as many as fit in the target duration, in what remains of the time budget, of
+/// the samples (`remaining`) and of what the error target needs.
+fn pass_size(
+    per_spp: Option<f64>,
+    budget: Budget,
+    elapsed: f64,
+    remaining: Option<u32>,
+    needed: Option<u32>,
+) -> u32 {
+    let mut count = match per_spp {
+        None => 1,
+        Some(c) => {
+            let mut secs = TARGET_PASS_SECONDS;
+            if let Some(s) = budget.seconds {
+                secs = secs.min(s - elapsed);
+            }
+            ((secs / c).floor() as u32).max(1)
+        }
+    };
+    if let Some(r) = remaining {
+        count = count.min(r);
+    }
+    if let Some(n) = needed {
+        count = count.min(n);
+    }
+    count
 }
 
 /// Light vertices per light subpath assumed by [`host_bytes_per_pixel`]: well above the mean

@@ -50,6 +50,10 @@ pub struct Faults {
     /// ρ_i Σ_j F_ij L_j, so that direct light is counted twice with next-event estimation's
     /// (false when correct).
     pub indirect_with_direct: bool,
+    /// Adaptive sampling: a round's samples weigh 1 instead of the round's budget over the
+    /// pixel's count (`crate::render::adaptive`), so that the counts, decided from the
+    /// pixel's own earlier samples, bias its mean (false when correct).
+    pub adaptive_pooled: bool,
 }
 
 impl Faults {
@@ -67,6 +71,7 @@ impl Faults {
         form_factor_scale: 1.0,
         form_factor_uniform_directions: false,
         indirect_with_direct: false,
+        adaptive_pooled: false,
     };
 }
 

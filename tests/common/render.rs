@@ -301,6 +301,35 @@ impl<'a> Render<'a> {
         film
     }
 
+    /// The film of an adaptive render (`render::adaptive`, `--adaptive`) on `backend`: `spp`
+    /// samples per pixel on average, spent as `settings` say.
+    pub fn adaptive(
+        &self,
+        backend: Backend,
+        settings: hexray::render::adaptive::AdaptiveSettings,
+    ) -> Film {
+        use hexray::render::adaptive::render_adaptive;
+        use hexray::render::{Budget, StopReason};
+        let (_, flat) = self.loaded();
+        let mut target = self.backend(backend, &flat);
+        let mut film = self.new_film();
+        let budget = Budget {
+            spp: Some(self.spp),
+            ..Budget::default()
+        };
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let report = render_adaptive(
+            target.as_mut(),
+            &mut film,
+            budget,
+            settings,
+            &never,
+            |_, _, _| {},
+        );
+        assert_eq!(report.reason, StopReason::SampleCount, "{backend:?}");
+        film
+    }
+
     /// This render's scene and method as a `render::Backend` on `backend` (CPU: two threads).
     fn backend<'f>(
         &self,

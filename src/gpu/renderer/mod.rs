@@ -1,6 +1,7 @@
 //! The GPU backend's work: upload the flattened scene as it is, compile the path-tracing
 //! kernel, run it in bounded dispatches, and fold each pass's sums into the f64 film.
 
+mod adaptive;
 mod iterations;
 mod radiosity;
 
@@ -8,7 +9,9 @@ use super::bidirectional::Bidirectional;
 use super::frame::{
     Frame, PixelSums, MAX_PASS_SPP, STOP_LATENCY_SECONDS, TARGET_DISPATCH_SECONDS, WORKGROUP,
 };
-use super::limits::{array_lengths, check_scene_fits, largest_binding, PIXEL_SUMS_BYTES};
+use super::limits::{
+    array_lengths, check_scene_fits, largest_binding, PIXEL_RUN_BYTES, PIXEL_SUMS_BYTES,
+};
 use super::pipeline::{bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload};
 use super::radiosity::{radiosity_layout, Radiosity};
 use super::shader::Residency;
@@ -41,10 +44,14 @@ pub struct GpuRenderer {
     pub(super) frame_buffer: wgpu::Buffer,
     pub(super) sums: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
+    /// Adaptive sampling's pixel runs of a pass (`adaptive_pass_until`).
+    pub(super) runs: wgpu::Buffer,
+    /// The planted faults the host applies (`Faults::adaptive_pooled`).
+    pub(super) faults: Faults,
     /// Image rows per film band: the pass sums of path tracing cover this many rows at a time,
     /// so that any image renders within the device's largest binding; the whole image for the
     /// other methods (`check_image_fits`).
-    film_rows: u32,
+    pub(super) film_rows: u32,
     pub(super) frame: Frame,
     pub(super) method: Method,
     /// Light tracing and BDPT: their kernels and buffers.
@@ -130,14 +137,14 @@ fn pixel_sums_buffers(
 }
 
 /// Bind group 0 of `shaders/scene.wgsl`: the six scene arrays as `residency` lays them out, the
-/// frame, the pass sums.
+/// frame, the pass sums, the pixel runs.
 fn scene_bind_group(
     device: &wgpu::Device,
     residency: Residency,
     scene: &FlatScene,
     layout: &wgpu::BindGroupLayout,
     frame_buffer: &wgpu::Buffer,
-    sums: &wgpu::Buffer,
+    (sums, runs): (&wgpu::Buffer, &wgpu::Buffer),
 ) -> Result<wgpu::BindGroup> {
     let buffers = [
         upload(device, residency, "triangles", &scene.triangles),
@@ -155,6 +162,10 @@ fn scene_bind_group(
     entries.push(wgpu::BindGroupEntry {
         binding: 7,
         resource: sums.as_entire_binding(),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: 8,
+        resource: runs.as_entire_binding(),
     });
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -260,7 +271,20 @@ impl GpuRenderer {
                 .clamp(1, height as u64) as u32
         };
         let (sums, readback) = pixel_sums_buffers(device, film_rows, width);
-        let bind_group = scene_bind_group(device, residency, scene, &layout, &frame_buffer, &sums)?;
+        // Adaptive sampling's runs: at most one a pixel of a band (path tracing only).
+        let run_slots = match method {
+            Method::Path => film_rows as u64 * width as u64,
+            _ => 1,
+        };
+        let runs = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel runs"),
+            size: run_slots * PIXEL_RUN_BYTES,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let buffers = (&sums, &runs);
+        let bind_group =
+            scene_bind_group(device, residency, scene, &layout, &frame_buffer, buffers)?;
         Ok(GpuRenderer {
             device: device.clone(),
             queue: queue.clone(),
@@ -269,6 +293,8 @@ impl GpuRenderer {
             frame_buffer,
             sums,
             readback,
+            runs,
+            faults,
             film_rows,
             frame,
             method,
@@ -383,6 +409,18 @@ impl GpuRenderer {
         &self,
         film: &mut Film,
         rows: u32,
+        work: impl FnMut(u32, u32) -> bool,
+    ) -> Result<bool> {
+        self.for_each_weighted_film_band(film, rows, |_| 1.0, work)
+    }
+
+    /// [`GpuRenderer::for_each_film_band`], each pixel's pass sums folded with `weight(pixel)`
+    /// (adaptive sampling's weight of the pixel's run, `PixelStats::merge_weighted`).
+    pub(super) fn for_each_weighted_film_band(
+        &self,
+        film: &mut Film,
+        rows: u32,
+        weight: impl Fn(usize) -> f64,
         mut work: impl FnMut(u32, u32) -> bool,
     ) -> Result<bool> {
         let h = self.frame.camera.height;
@@ -399,7 +437,7 @@ impl GpuRenderer {
             let mut encoder = self.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&self.sums, 0, &self.readback, 0, None);
             self.queue.submit([encoder.finish()]);
-            self.fold_sums(film, band_start, band_end - band_start)?;
+            self.fold_sums(film, band_start, band_end - band_start, &weight)?;
             band_start = band_end;
         }
         Ok(true)
@@ -440,30 +478,36 @@ impl GpuRenderer {
                 film_rows: band_end - band_start,
                 ..self.frame
             };
-            // One submission per dispatch: the uniform write lands before this dispatch and
-            // after the previous one.
-            self.queue
-                .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
-            let mut encoder = self.device.create_command_encoder(&Default::default());
-            {
-                let mut cpass = encoder.begin_compute_pass(&Default::default());
-                cpass.set_pipeline(self.pipeline.as_ref().expect("path tracing's kernel"));
-                cpass.set_bind_group(0, &self.bind_group, &[]);
-                if let Some(r) = &self.radiosity {
-                    if let Some(solved) = &r.solved {
-                        cpass.set_bind_group(1, &r.empty_group, &[]);
-                        cpass.set_bind_group(2, &solved.bind_group, &[]);
-                    }
-                }
-                cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1);
-            }
-            self.queue.submit([encoder.finish()]);
+            self.dispatch_pass(&frame);
             y += rows;
             if y < band_end && self.stop_seen(stop, checked) {
                 return false;
             }
         }
         true
+    }
+
+    /// Submits one dispatch of the pass kernel over `frame`'s tile (workgroups of WORKGROUP x
+    /// WORKGROUP), with `frame` as its uniform: one submission per dispatch, so that the
+    /// uniform write lands before this dispatch and after the previous one.
+    pub(super) fn dispatch_pass(&self, frame: &Frame) {
+        self.queue
+            .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(frame));
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        {
+            let mut cpass = encoder.begin_compute_pass(&Default::default());
+            cpass.set_pipeline(self.pipeline.as_ref().expect("the pass kernel"));
+            cpass.set_bind_group(0, &self.bind_group, &[]);
+            if let Some(r) = &self.radiosity {
+                if let Some(solved) = &r.solved {
+                    cpass.set_bind_group(1, &r.empty_group, &[]);
+                    cpass.set_bind_group(2, &solved.bind_group, &[]);
+                }
+            }
+            let [w, h] = frame.tile_size;
+            cpass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), 1);
+        }
+        self.queue.submit([encoder.finish()]);
     }
 
     /// Rows per film band (tests: a band of a few rows exercises the split on a small image),
@@ -477,21 +521,21 @@ impl GpuRenderer {
     }
 
     /// Reads the pass's sums back (copied to `readback` by the queued work) and folds them into
-    /// the film in f64: rows `first_row..first_row + rows`.
-    pub(super) fn fold_sums(&self, film: &mut Film, first_row: u32, rows: u32) -> Result<()> {
+    /// the film in f64, pixel p's with `weight(p)`: rows `first_row..first_row + rows`.
+    fn fold_sums(
+        &self,
+        film: &mut Film,
+        first_row: u32,
+        rows: u32,
+        weight: impl Fn(usize) -> f64,
+    ) -> Result<()> {
         let bytes = self.read_buffer(&self.readback)?;
         let sums: Vec<PixelSums> = bytemuck::pod_collect_to_vec(&bytes);
         let w = film.width as usize;
-        let band = &mut film.pixels[first_row as usize * w..(first_row + rows) as usize * w];
-        for (p, s) in band.iter_mut().zip(&sums) {
-            for c in 0..3 {
-                p.sum[c] += s.sum[c] as f64;
-                p.sum_sq[c] += s.sum_sq[c] as f64;
-                p.even_sum[c] += s.even_sum[c] as f64;
-            }
-            p.n += s.n as u64;
-            p.dropped += s.dropped as u64;
-            p.even_n += s.even_n as u64;
+        let start = first_row as usize * w;
+        let band = &mut film.pixels[start..(first_row + rows) as usize * w];
+        for (i, (p, s)) in band.iter_mut().zip(&sums).enumerate() {
+            p.merge_weighted(&s.stats(), weight(start + i));
         }
         Ok(())
     }
