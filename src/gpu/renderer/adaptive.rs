@@ -10,8 +10,13 @@ use anyhow::{ensure, Result};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-/// Runs per row of the grid a dispatch lays them out in (eight workgroups).
-const RUNS_PER_ROW: u32 = 8 * WORKGROUP;
+/// Runs per row of the grid a dispatch lays them out in: one workgroup wide, so that each
+/// workgroup takes WORKGROUP² consecutive runs (of about as many samples, in the sorted order).
+const RUNS_PER_ROW: u32 = WORKGROUP;
+
+/// The most runs one dispatch covers: a grid one workgroup wide and the most workgroups a
+/// dimension may have (wgpu's default `max_compute_workgroups_per_dimension`).
+const MAX_RUNS_PER_DISPATCH: usize = 65535 * (WORKGROUP * WORKGROUP) as usize;
 
 impl GpuRenderer {
     /// Adds each run's samples to its pixel, folded into the film with the run's weight
@@ -119,7 +124,10 @@ impl GpuRenderer {
         let mut offset = 0;
         while offset < band.len() {
             let (mut k, mut paths) = (0, 0u64);
-            while offset + k < band.len() && (k == 0 || paths < self.paths_per_dispatch) {
+            while offset + k < band.len()
+                && k < MAX_RUNS_PER_DISPATCH
+                && (k == 0 || paths < self.paths_per_dispatch)
+            {
                 paths += band[offset + k][2] as u64;
                 k += 1;
             }
