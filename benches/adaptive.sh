@@ -6,14 +6,15 @@
 #
 # 1. Equal time: `hexray render --method path --time T` uniform and `--adaptive`, alternating,
 #    seeds SEEDS (default "1 2 3"); relMSE by `hexray compare` against
-#    - tncg15_room, 256x256, T = 4 s: tests/data/references/h100/tncg15_room_256.exr;
-#    - mirror_caustic (scenes/stability), 128x128, T = 2 s: a uniform render of 8192 spp (seed
-#      99) that this script makes first (about 20 s).
+#    - tncg15_room, 256x256, T = 4 s, CPU: tests/data/references/h100/tncg15_room_256.exr;
+#    - mirror_caustic (scenes/stability), 128x128, T = 2 s, CPU, and T = 8 s on the GPU adapter
+#      (lavapipe here; its time includes the kernel's compilation): a uniform render of 8192 spp
+#      (seed 99) that this script makes first (about 20 s).
 # 2. The bound (examples/adaptive_bound.rs): from two uniform renders with --variance (seeds 11
 #    and 12), the relMSE of the best plan of `--adaptive`'s form over uniform's, at equal
 #    samples and without a warm-up: path (1024 spp) and vcm (256 iterations) on tncg15_room,
 #    path on mirror_caustic (1024 spp).
-# Writes OUT/adaptive.txt. About 6 minutes on 2 cores. A benchmark: it asserts nothing.
+# Writes OUT/adaptive.txt. About 3.5 minutes on 2 cores. A benchmark: it asserts nothing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 hexray=${HEXRAY:-target/release/hexray}
@@ -26,7 +27,7 @@ cargo build --release --example adaptive_bound -q
 bound=target/release/examples/adaptive_bound
 start=$(date +%s)
 
-render() { "$hexray" render "$@" --backend cpu --method path -q; }
+render() { "$hexray" render "$@" --method path -q; }
 relmse() { "$hexray" compare "$1" "$2" | awk '/^relMSE/ {print $2}'; }
 
 {
@@ -34,21 +35,22 @@ echo "# benches/adaptive.sh, $(date -u +%Y-%m-%dT%H:%MZ), hexray $(git rev-parse
 echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores"
 echo
 echo "## Equal time: relMSE, uniform and --adaptive (alternating), and their ratio"
-echo "scene seconds seed uniform adaptive ratio"
-render scenes/stability/mirror_caustic.json --width 128 --height 128 --spp 8192 --seed 99 \
-    --out "$tmp/mirror_caustic_ref.exr"
-for case in "tncg15_room 256 4 tests/data/references/h100/tncg15_room_256.exr" \
-            "stability/mirror_caustic 128 2 $tmp/mirror_caustic_ref.exr"; do
+echo "scene backend seconds seed uniform adaptive ratio"
+render scenes/stability/mirror_caustic.json --backend cpu --width 128 --height 128 --spp 8192 \
+    --seed 99 --out "$tmp/mirror_caustic_ref.exr"
+for case in "tncg15_room cpu 256 4 tests/data/references/h100/tncg15_room_256.exr" \
+            "stability/mirror_caustic cpu 128 2 $tmp/mirror_caustic_ref.exr" \
+            "stability/mirror_caustic gpu 128 8 $tmp/mirror_caustic_ref.exr"; do
     set -- $case
-    scene=$1 side=$2 seconds=$3 ref=$4
+    scene=$1 backend=$2 side=$3 seconds=$4 ref=$5
     for seed in $seeds; do
-        render "scenes/$scene.json" --width "$side" --height "$side" --time "$seconds" \
-            --seed "$seed" --out "$tmp/u.exr"
-        render "scenes/$scene.json" --width "$side" --height "$side" --time "$seconds" \
-            --seed "$seed" --adaptive --out "$tmp/a.exr"
+        render "scenes/$scene.json" --backend "$backend" --width "$side" --height "$side" \
+            --time "$seconds" --seed "$seed" --out "$tmp/u.exr"
+        render "scenes/$scene.json" --backend "$backend" --width "$side" --height "$side" \
+            --time "$seconds" --seed "$seed" --adaptive --out "$tmp/a.exr"
         u=$(relmse "$tmp/u.exr" "$ref")
         a=$(relmse "$tmp/a.exr" "$ref")
-        echo "$(basename "$scene") $seconds $seed $u $a $(python3 -c "print(f'{$a / $u:.3f}')")"
+        echo "$(basename "$scene") $backend $seconds $seed $u $a $(python3 -c "print(f'{$a / $u:.3f}')")"
     done
 done
 echo
