@@ -104,6 +104,22 @@ on_each_backend! {
     }
 }
 
+on_each_backend! {
+    /// A stop under way ends the render between passes, or drops the pass under way whole:
+    /// the film keeps every sample of the passes before, with their weights, and its image is
+    /// as unbiased as a finished one.
+    fn a_stopped_adaptive_render_keeps_its_samples(backend) {
+        let after = std::time::Duration::from_millis(1500);
+        let (film, reason) = room(64, 1 << 20).adaptive_stopped(backend, after);
+        assert_eq!(reason, hexray::render::StopReason::Interrupted, "{backend}");
+        assert!(film.spp() >= 8, "{backend}: {} spp kept", film.spp());
+        let (mean, se) = film.image_mean();
+        let z: [f64; 3] = std::array::from_fn(|c| (mean[c] - TRUTH[c]) / se[c]);
+        eprintln!("{backend}: stopped at {} spp, z {z:.2?}", film.spp());
+        assert_within_4_se(z, &format!("{backend}: stopped"));
+    }
+}
+
 /// Both backends draw the same samples and plan the same rounds from them: their adaptive
 /// films agree pixel by pixel within the GPU's f32 pass sums.
 #[test]

@@ -273,8 +273,12 @@ pub fn render_adaptive(
             // Stopped under way: the pass was dropped whole.
             break StopReason::Interrupted;
         }
-        let dt = t0.elapsed().as_secs_f64();
-        per_spp = Some(dt / count.max(1) as f64);
+        // The cost of a sample per pixel, from the samples the pass took (none where every
+        // pixel's share rounded down to nothing: the next pass is sized as the first).
+        if wanted > 0 {
+            let spp = wanted as f64 / film.pixels.len() as f64;
+            per_spp = Some(t0.elapsed().as_secs_f64() / spp);
+        }
         done += (next - *phi) * r.budget as f64;
         *phi = next;
         on_pass(film, done.round() as u32, start.elapsed().as_secs_f64());

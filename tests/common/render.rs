@@ -330,6 +330,41 @@ impl<'a> Render<'a> {
         film
     }
 
+    /// An adaptive render on `backend` with the default settings, stopped `after` into it
+    /// (`spp` should be more than that time takes): the film and why the render ended.
+    pub fn adaptive_stopped(
+        &self,
+        backend: Backend,
+        after: std::time::Duration,
+    ) -> (Film, hexray::render::StopReason) {
+        use hexray::render::adaptive::{render_adaptive, AdaptiveSettings};
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let (_, flat) = self.loaded();
+        let mut target = self.backend(backend, &flat);
+        let mut film = self.new_film();
+        let budget = hexray::render::Budget {
+            spp: Some(self.spp),
+            ..Default::default()
+        };
+        let stop = AtomicBool::new(false);
+        let settings = AdaptiveSettings::default();
+        let report = std::thread::scope(|s| {
+            s.spawn(|| {
+                std::thread::sleep(after);
+                stop.store(true, Ordering::SeqCst);
+            });
+            render_adaptive(
+                target.as_mut(),
+                &mut film,
+                budget,
+                settings,
+                &stop,
+                |_, _, _| {},
+            )
+        });
+        (film, report.reason)
+    }
+
     /// This render's scene and method as a `render::Backend` on `backend` (CPU: two threads).
     fn backend<'f>(
         &self,
