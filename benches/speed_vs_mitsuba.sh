@@ -4,7 +4,9 @@
 # a ratio measured this way counts; issue 17).
 #
 #   benches/speed_vs_mitsuba.sh [SCENE_NAME ...]   (default: tncg15_room cornell_box glass_room)
+#   benches/speed_vs_mitsuba.sh tncg15_room bunny_room perf/bunny_room_1m   # the mesh scenes
 #
+# A scene of scenes/perf/ whose mesh is generated (bunny_room_1m) has it generated first.
 # Per round and scene: `hexray bench` (path, CPU, THREADS threads, 256x256, SPP samples, after its
 # warm-up; its render time only) and Mitsuba's render call of the same scene, size and samples
 # (after a warm-up render that compiles its kernels; ../shared/mitsuba/mitsuba_side.py time), in
@@ -23,6 +25,11 @@ threads=${THREADS:-2}
 rounds=${ROUNDS:-5}
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(tncg15_room cornell_box glass_room)
+for name in "${scenes[@]}"; do
+    if grep -q 'generated/bunny_1m.ply' "scenes/$name.json" && [ ! -f scenes/models/generated/bunny_1m.ply ]; then
+        python3 scenes/models/make_large_mesh.py > /dev/null
+    fi
+done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -61,4 +68,12 @@ for scene in dict.fromkeys(r["scene"] for r in rows):
             by.setdefault(r["round"], {})[r["renderer"]] = float(r["paths_per_second"])
     ratios = [v["hexray"] / v["mitsuba"] for v in by.values() if len(v) == 2]
     print(f"{scene},{statistics.median(ratios):.3f},{min(ratios):.3f},{max(ratios):.3f},{len(ratios)}")
+# Each renderer's median paths/s, and its cost per path over the first scene's (same renderer).
+print("\nscene,renderer,median M paths/s,cost per path / " + rows[0]["scene"])
+for renderer in ("hexray", "mitsuba"):
+    med = {}
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        med[scene] = statistics.median(float(r["paths_per_second"]) for r in rows
+                                       if r["scene"] == scene and r["renderer"] == renderer)
+        print(f"{scene},{renderer},{med[scene] / 1e6:.3f},{med[rows[0]['scene']] / med[scene]:.2f}")
 PY

@@ -7,10 +7,9 @@
 //! cargo run --release --example packet_rays [SCENE.json ...]
 //! ```
 //!
-//! Default: the three reference scenes. The packets' closest-hit traversal pays on small trees
-//! and not on large ones, which is why `packet::intersect_closest_lanes` takes packets only up to
-//! `PACKET_CLOSEST_MAX_NODES` four-wide nodes (the tessellated rooms and the bunny of
-//! `scenes/perf/` show the other side).
+//! Default: the three reference scenes. On a large tree (`packet::LARGE_TREE_NODES`; the
+//! tessellated rooms and the bunny of `scenes/perf/`) a packet visits children nearest first and
+//! hands rays that part ways to single-ray traversal, which this measures too.
 
 use hexray::accel::bvh::{intersect_closest, occluded};
 use hexray::accel::packet::{intersect_closest_packets, occluded_all};

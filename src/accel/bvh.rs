@@ -32,6 +32,14 @@ pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 pub(crate) const WIDE_STACK_SIZE: usize = (crate::accel::wide_bvh::WIDTH - 1) * MAX_DEPTH;
 /// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2).
 const TRAVERSAL_COST: f32 = 0.5;
+/// Scenes of more primitives than this cost a leaf by its packs of four primitives, not by its
+/// primitives. In a large tree the packets hand their rays to single-ray traversal below the top
+/// levels ([`crate::accel::packet::SINGLE_RAY_LANES`]), which tests a leaf's four triangles at
+/// once ([`intersect_triangles4`]): full leaves then halve the nodes and the memory of
+/// bunny_room_1m and give it 1.15x the camera paths/s. In a small tree the rays stay in packets,
+/// which test a leaf's triangles one at a time, and there the reference rooms lost 7 – 10 % with
+/// full leaves (docs/journal/2026-11-29_meshes.md).
+const PACKED_LEAVES_ABOVE: usize = 4096;
 
 #[derive(Clone, Copy)]
 struct Aabb {
@@ -129,7 +137,8 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
         });
         return (nodes, Vec::new());
     }
-    flatten_root(&build_node(&mut info, 0, 0), &info, nodes)
+    let packed = n > PACKED_LEAVES_ABOVE;
+    flatten_root(&build_node(&mut info, 0, 0, packed), &info, nodes)
 }
 
 /// Flattens the tree `root` into `nodes` and the padded `prims` that [`build`] returns.
@@ -236,8 +245,16 @@ fn flatten(
 const PARALLEL_BUILD: usize = 4096;
 
 /// Builds the subtree over `info` (which starts at entry `start` of the whole array), reordering
-/// `info` so that every leaf's primitives are contiguous.
-fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
+/// `info` so that every leaf's primitives are contiguous; a leaf costs its packs of four where
+/// `packed` ([`PACKED_LEAVES_ABOVE`]), else its primitives.
+fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -> Built {
+    let leaf_cost = |n: usize| {
+        if packed {
+            n.div_ceil(4) as f32
+        } else {
+            n as f32
+        }
+    };
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for p in info.iter() {
@@ -255,7 +272,8 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
     }
 
     // Choose the split: the cheapest bucket boundary over all three axes by the surface area
-    // heuristic, cost = C_trav + (N_l A_l + N_r A_r) / A (MacDonald and Booth 1990).
+    // heuristic, cost = C_trav + (C(N_l) A_l + C(N_r) A_r) / A (MacDonald and Booth 1990), C(N)
+    // the cost of a leaf of N primitives.
     let extent = cbounds.max - cbounds.min;
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bucket boundary)
     for axis in 0..3 {
@@ -279,7 +297,7 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
         for b in (1..BINS).rev() {
             acc.grow(&boxes[b]);
             n += counts[b];
-            right_cost[b] = n as f32 * acc.area();
+            right_cost[b] = leaf_cost(n) * acc.area();
         }
         let (mut acc, mut n) = (Aabb::EMPTY, 0usize);
         for b in 1..BINS {
@@ -288,7 +306,7 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
             if n == 0 || n == count {
                 continue;
             }
-            let cost = TRAVERSAL_COST + (n as f32 * acc.area() + right_cost[b]) / bounds.area();
+            let cost = TRAVERSAL_COST + (leaf_cost(n) * acc.area() + right_cost[b]) / bounds.area();
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
@@ -297,7 +315,7 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
 
     let mid = match best {
         Some((cost, axis, boundary)) => {
-            if count <= MAX_LEAF && cost >= count as f32 {
+            if count <= MAX_LEAF && cost >= leaf_cost(count) {
                 return leaf;
             }
             let (lo, ext) = (cbounds.min[axis], extent[axis]);
@@ -317,13 +335,13 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize) -> Built {
     let (left, right) = info.split_at_mut(mid);
     let (first, second) = if count > PARALLEL_BUILD {
         rayon::join(
-            || build_node(left, start, depth + 1),
-            || build_node(right, start + mid, depth + 1),
+            || build_node(left, start, depth + 1, packed),
+            || build_node(right, start + mid, depth + 1, packed),
         )
     } else {
         (
-            build_node(left, start, depth + 1),
-            build_node(right, start + mid, depth + 1),
+            build_node(left, start, depth + 1, packed),
+            build_node(right, start + mid, depth + 1, packed),
         )
     };
     Built::Interior {
@@ -381,16 +399,36 @@ pub(crate) struct Candidate {
 /// at the same t (a ray through an edge two triangles share), the one of the lower primitive id
 /// ([`nearer`]).
 pub fn intersect_closest(scene: &FlatScene, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-    let mut best: Option<Candidate> = None;
-    traverse(scene, ray, t_max, |prim, t, _t_err, b1, b2, t_limit| {
-        if nearer(t, prim, *t_limit, best) {
-            *t_limit = t;
-            best = Some(Candidate { t, prim, b1, b2 });
-        }
-        false
-    });
-    let c = best?;
+    let c = closest_below(scene, ray, 0, t_max, None)?;
     Some(surface_hit(scene, ray, c))
+}
+
+/// The nearest hit of `ray` in the subtree of wide node `start`, if nearer than `best` (the
+/// nearest found so far elsewhere, its t `t_limit` where there is one) by the rule of
+/// [`nearer`]; else `best`. The packets of [`crate::accel::packet`] hand single rays to it deep
+/// in a large tree.
+#[inline]
+pub(crate) fn closest_below(
+    scene: &FlatScene,
+    ray: &Ray,
+    start: u32,
+    t_limit: f32,
+    mut best: Option<Candidate>,
+) -> Option<Candidate> {
+    traverse(
+        scene,
+        ray,
+        start,
+        t_limit,
+        |prim, t, _t_err, b1, b2, t_limit| {
+            if nearer(t, prim, *t_limit, best) {
+                *t_limit = t;
+                best = Some(Candidate { t, prim, b1, b2 });
+            }
+            false
+        },
+    );
+    best
 }
 
 /// Whether a hit at `t` on primitive `prim` (its id as `prims` holds it: a triangle's index, or a
@@ -408,13 +446,25 @@ pub(crate) fn nearer(t: f32, prim: u32, t_limit: f32, best: Option<Candidate>) -
 /// Any-hit mode, for shadow rays: is anything within the open segment (0, `t_max`)? A hit within
 /// its own error bound of `t_max` does not count, since the segment ends on a surface.
 pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
+    occluded_below(scene, ray, 0, t_max)
+}
+
+/// [`occluded`] within the subtree of wide node `start`.
+#[inline]
+pub(crate) fn occluded_below(scene: &FlatScene, ray: &Ray, start: u32, t_max: f32) -> bool {
     let mut hit = false;
-    traverse(scene, ray, t_max, |_prim, t, t_err, _b1, _b2, t_limit| {
-        if t < *t_limit - t_err {
-            hit = true;
-        }
-        hit
-    });
+    traverse(
+        scene,
+        ray,
+        start,
+        t_max,
+        |_prim, t, t_err, _b1, _b2, t_limit| {
+            if t < *t_limit - t_err {
+                hit = true;
+            }
+            hit
+        },
+    );
     #[cfg(feature = "counters")]
     counters::last_was_shadow();
     hit
@@ -432,11 +482,13 @@ pub fn occluded(scene: &FlatScene, ray: &Ray, t_max: f32) -> bool {
 /// bit the scalar test per lane; 15 – 18 % less render time than one at a time) and their hits
 /// reported in entry order, so the result is the scalar traversal's. Both measured in
 /// docs/journal/2026-11-23_cpu_traversal.md. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
-/// what a hit means; it returns true to stop at once (any-hit).
+/// what a hit means; it returns true to stop at once (any-hit). The traversal starts at wide node
+/// `start` (0, the root, but for a packet's ray going on alone below a node).
 #[inline]
 fn traverse(
     scene: &FlatScene,
     ray: &Ray,
+    start: u32,
     t_max: f32,
     mut on_hit: impl FnMut(u32, f32, f32, f32, f32, &mut f32) -> bool,
 ) {
@@ -447,7 +499,7 @@ fn traverse(
     let _work = counters::Ray::start();
     // Interior children still to visit, with the distance at which the ray enters them.
     let mut stack = ArrayVec::<(u32, f32), WIDE_STACK_SIZE>::new();
-    let mut current = 0u32;
+    let mut current = start;
     loop {
         let node = &scene.wide[current as usize];
         #[cfg(feature = "counters")]

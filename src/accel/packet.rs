@@ -19,6 +19,14 @@
 //! blends, and a node's eight slab tests come before its children are visited, so that few branches
 //! depend on which lanes hit (docs/journal/2026-11-27_branches.md).
 //!
+//! A packet's closest-hit traversal visits the children a lane enters nearest first (by the least
+//! entry distance of the lanes that enter each), so that a large tree's far subtrees are culled by
+//! the hits found first. Where only [`SINGLE_RAY_LANES`] of the packet's rays enter a subtree, those
+//! rays go on alone below it ([`crate::accel::bvh::closest_below`],
+//! [`crate::accel::bvh::occluded_below`]): deep in a large mesh the rays of a packet part ways, and
+//! a node costs one ray an eighth of the packet's slab tests (Benthin et al. 2012, "Combining single
+//! and packet-ray tracing for arbitrary ray distributions on the Intel MIC architecture").
+//!
 //! Needs AVX (checked at run time, so the portable build uses it too); elsewhere each ray takes
 //! the scalar traversal.
 
@@ -30,18 +38,22 @@ use crate::math::lanes::{lanes_of, F8, V8};
 /// The most rays a packet holds.
 pub const PACKET: usize = 8;
 
-/// The four-wide trees up to which closest-hit rays go in packets. A packet's incoherent rays
-/// (diffuse bounces) visit the union of their nodes: per ray 0.79 – 0.88 of the scalar time on
-/// trees of 7 – 61 nodes (the reference scenes, tncg15_room_x9), 1.06 – 1.15 on trees of 664 –
-/// 470 209 (tncg15_room_x100, bunny_room, bunny_room_1m; `examples/packet_rays.rs`). Shadow
-/// rays, all aimed at the lights, take 0.32 – 0.68 on every one of them and always go in
-/// packets.
-pub const PACKET_CLOSEST_MAX_NODES: usize = 64;
+/// Trees of more four-wide nodes than this are large: there a packet's closest-hit traversal
+/// visits children nearest first, and rays go on alone below a node that few of them enter. In
+/// a small tree a packet's rays stay coherent down to the leaves, and both cost more than they
+/// save: 0.94 – 0.97x camera paths/s on the three reference rooms (7 – 8 nodes) with them, 1.37 –
+/// 1.41x on bunny_room (1 699 nodes) and bunny_room_1m (docs/journal/2026-11-29_meshes.md).
+pub const LARGE_TREE_NODES: usize = 64;
+
+/// In a large tree ([`LARGE_TREE_NODES`]), a subtree that at most this many of a packet's rays
+/// enter is traversed by each of them alone.
+/// One lane: in a render of bunny_room_1m with two lanes the camera paths/s were 0.96 of one
+/// lane's, and on the reference rooms the same (docs/journal/2026-11-29_meshes.md).
+pub const SINGLE_RAY_LANES: u32 = 1;
 
 /// The nearest hit of each ray (`t` in (its error bound, f32::MAX)), as
-/// [`intersect_closest`] finds it, for any number of rays, in packets of eight whatever the
-/// tree where the CPU has AVX, else one by one (the path tracer's slots take packets only on
-/// small trees: [`intersect_closest_lanes`]).
+/// [`intersect_closest`] finds it, for any number of rays, in packets of eight where the CPU has
+/// AVX, else one by one.
 pub fn intersect_closest_packets(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
     assert_eq!(rays.len(), hits.len());
     #[cfg(target_arch = "x86_64")]
@@ -121,12 +133,12 @@ impl HitLanes {
 /// The nearest hit of each ray in `lanes` (bits) of eight rays given as rows (`o`, `d`: a
 /// coordinate of every lane per row, as a wavefront holds them in structure-of-arrays form),
 /// as [`intersect_closest`] finds it, in rows: one packet, without gathering the rays, where
-/// the tree is small ([`PACKET_CLOSEST_MAX_NODES`]) and the CPU has AVX, its triangle hits'
-/// points computed in lanes ([`crate::math::lanes::triangle_hit_point`]); else lane by lane. A
-/// lane outside `lanes` hits nothing.
+/// the CPU has AVX, its triangle hits' points computed in lanes
+/// ([`crate::math::lanes::triangle_hit_point`]); else lane by lane. A lane outside `lanes` hits
+/// nothing.
 pub fn intersect_closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> HitLanes {
     #[cfg(target_arch = "x86_64")]
-    if scene.nodes.len() <= PACKET_CLOSEST_MAX_NODES && std::arch::is_x86_feature_detected!("avx") {
+    if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX (checked above).
         return unsafe { avx::closest_lanes(scene, (o, d), lanes) };
     }
@@ -162,8 +174,10 @@ pub fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use super::{ray_of, HitLanes};
-    use crate::accel::bvh::{surface_hit, Candidate, WIDE_STACK_SIZE};
+    use super::{ray_of, HitLanes, LARGE_TREE_NODES};
+    use crate::accel::bvh::{
+        closest_below, occluded_below, surface_hit, Candidate, WIDE_STACK_SIZE,
+    };
     use crate::layout::{FlatScene, Sphere, EMPTY_SLOT, PRIM_SPHERE_BIT};
     use crate::math::geometry::{gamma, Ray, SurfaceHit};
     use crate::math::lanes::lanes_of;
@@ -441,27 +455,54 @@ mod avx {
         out
     }
 
-    /// Calls `leaf(first, end, lanes, mask)` for every leaf of the wide tree that one of the
-    /// packet's active lanes enters before its `t_limit`, `lanes` the bits of those and `mask`
-    /// the lanes (active or not) that enter it; the leaf may lower the limits and deactivate
-    /// lanes. A leaf's hits count only for the lanes that enter its box, as in `bvh`.
+    /// Calls `leaf(state, packet, t_limit, first, end, lanes, mask)` for every leaf of the wide
+    /// tree that one of the packet's active lanes enters before its `t_limit`, `lanes` the bits
+    /// of those and `mask` the lanes (active or not) that enter it; the leaf may lower the
+    /// limits and deactivate lanes. A leaf's hits count only for the lanes that enter its box,
+    /// as in `bvh`. In a large tree ([`super::LARGE_TREE_NODES`]) a subtree that at most
+    /// [`super::SINGLE_RAY_LANES`] active lanes enter goes to `single(state, packet, t_limit,
+    /// node, lanes)` instead, which traces those lanes alone, and in closest-hit mode (`CLOSEST`)
+    /// the interior children are visited nearest first, a popped node that every active lane's
+    /// nearest hit has since passed dropped. Otherwise, and in any-hit mode, slot order (ordered, shadow packets took
+    /// 1.2 – 1.6 times as long in `examples/packet_rays.rs`: any hit stops a lane, so the order culls nothing).
     #[inline]
     #[target_feature(enable = "avx")]
-    fn traverse(
+    fn traverse<const CLOSEST: bool, const LARGE: bool, S>(
         scene: &FlatScene,
         p: &mut Packet,
         t_limit: &mut __m256,
-        mut leaf: impl FnMut(&mut Packet, &mut __m256, usize, usize, i32, __m256),
+        state: &mut S,
+        mut leaf: impl FnMut(&mut S, &mut Packet, &mut __m256, usize, usize, i32, __m256),
+        mut single: impl FnMut(&mut S, &mut Packet, &mut __m256, u32, i32),
     ) {
-        // Interior nodes still to visit: at most seven net pushes a level, as in `bvh`.
-        // (Not an array zeroed per traversal: at 1.7 KB, writing it costs more than a small
-        // tree's whole traversal of a shadow packet.)
+        // Interior nodes still to visit, each with the least entry distance of the lanes that
+        // entered it (closest-hit mode) and those lanes: at most seven net pushes a level, as in
+        // `bvh`. (Not an array zeroed per traversal: writing it costs more than a small tree's
+        // whole traversal of a shadow packet.)
         let mut stack = arrayvec::ArrayVec::<u32, { WIDE_STACK_SIZE + 1 }>::new();
+        // Beside each entry of `stack` in a large tree: (key, lanes).
+        let mut keys = arrayvec::ArrayVec::<(f32, i32), { WIDE_STACK_SIZE + 1 }>::new();
         stack.push(0);
+        if LARGE {
+            keys.push((0.0, p.active));
+        }
         while p.active != 0 {
             let Some(index) = stack.pop() else {
                 break;
             };
+            let (key, entering) = if LARGE {
+                keys.pop().unwrap_or_default()
+            } else {
+                (0.0, p.active)
+            };
+            // (The nearest hit of every active lane has since passed the node's box.)
+            if LARGE && CLOSEST && key > hmax(_mm256_and_ps(*t_limit, bits_to_mask(p.active))) {
+                continue;
+            }
+            if LARGE && (entering & p.active).count_ones() <= super::SINGLE_RAY_LANES {
+                single(state, p, t_limit, index, entering & p.active);
+                continue;
+            }
             let node = &scene.wide[index as usize];
             // Every occupied slot's slab test first (a node's empty slots come after its
             // children, `wide_bvh::collapse`), without a branch on its outcome: the children
@@ -478,6 +519,8 @@ mod avx {
                 let entered = _mm256_movemask_ps(within(*span_c, *t_limit)) & p.active;
                 children |= u32::from(entered != 0) << c;
             }
+            let mut inner =
+                arrayvec::ArrayVec::<(f32, u32, i32), { crate::accel::wide_bvh::WIDTH }>::new();
             // Then those children in slot order, each against the limit as it stands when its
             // turn comes: a leaf before it may have lowered the limit, and a lower limit enters
             // no child that the first test did not.
@@ -491,16 +534,69 @@ mod avx {
                     continue;
                 }
                 if count == 0 {
-                    stack.push(node.child[c]);
+                    if LARGE && CLOSEST {
+                        // The child's key: the least entry distance of the lanes entering it.
+                        let near = _mm256_blendv_ps(
+                            _mm256_set1_ps(f32::INFINITY),
+                            spans[c].0,
+                            _mm256_and_ps(mask, bits_to_mask(p.active)),
+                        );
+                        inner.push((hmin(near), node.child[c], entered));
+                    } else {
+                        stack.push(node.child[c]);
+                        if LARGE {
+                            keys.push((0.0, entered));
+                        }
+                    }
                 } else {
                     let first = node.child[c] as usize;
-                    leaf(p, t_limit, first, first + count as usize, entered, mask);
+                    leaf(
+                        state,
+                        p,
+                        t_limit,
+                        first,
+                        first + count as usize,
+                        entered,
+                        mask,
+                    );
                     if p.active == 0 {
                         return;
                     }
                 }
             }
+            // Pushed farthest first, so that the nearest is visited first.
+            for i in 1..inner.len() {
+                let mut j = i;
+                while j > 0 && inner[j - 1].0 < inner[j].0 {
+                    inner.swap(j - 1, j);
+                    j -= 1;
+                }
+            }
+            for (k, n, e) in inner {
+                stack.push(n);
+                keys.push((k, e));
+            }
         }
+    }
+
+    /// The least of a vector's lanes.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn hmin(v: __m256) -> f32 {
+        let m = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
+        _mm256_cvtss_f32(m)
+    }
+
+    /// The greatest of a vector's lanes.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn hmax(v: __m256) -> f32 {
+        let m = _mm256_max_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let m = _mm256_max_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
+        let m = _mm256_max_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
+        _mm256_cvtss_f32(m)
     }
 
     /// Every lane's nearest hit so far: its barycentrics and its primitive's id (`NO_PRIM`
@@ -571,7 +667,7 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn closest(scene: &FlatScene, rays: &[Ray], hits: &mut [Option<SurfaceHit>]) {
-        let (t, b1, b2, held) = closest_packet(scene, load(rays));
+        let (t, b1, b2, held) = closest_in(scene, load(rays));
         for (l, h) in hits.iter_mut().enumerate() {
             *h = (held[l] != NO_PRIM).then(|| {
                 let c = Candidate {
@@ -593,7 +689,7 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn closest_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> HitLanes {
-        let (t, b1, b2, held) = closest_packet(scene, from_lanes((o, d), lanes));
+        let (t, b1, b2, held) = closest_in(scene, from_lanes((o, d), lanes));
         let mut hits = HitLanes {
             t: F8::new(t),
             prim: held,
@@ -643,11 +739,22 @@ mod avx {
         hits
     }
 
-    /// The traversal of [`closest`]: each lane's nearest t, barycentrics and primitive
-    /// (`NO_PRIM` where none).
+    /// [`closest_packet`] for the size of the scene's tree ([`LARGE_TREE_NODES`]).
     #[inline]
     #[target_feature(enable = "avx")]
-    fn closest_packet(
+    fn closest_in(scene: &FlatScene, p: Packet) -> ([f32; 8], [f32; 8], [f32; 8], [u32; 8]) {
+        if scene.nodes.len() > LARGE_TREE_NODES {
+            closest_packet::<true>(scene, p)
+        } else {
+            closest_packet::<false>(scene, p)
+        }
+    }
+
+    /// The traversal of [`closest`]: each lane's nearest t, barycentrics and primitive
+    /// (`NO_PRIM` where none); `LARGE`, the tree is large ([`LARGE_TREE_NODES`]).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn closest_packet<const LARGE: bool>(
         scene: &FlatScene,
         mut p: Packet,
     ) -> ([f32; 8], [f32; 8], [f32; 8], [u32; 8]) {
@@ -660,46 +767,97 @@ mod avx {
         // The packet's rays: the lanes past them never take a hit (closest-hit lanes stay
         // active to the end).
         let rays_mask = bits_to_mask(p.active);
-        traverse(
-            scene,
-            &mut p,
-            &mut t_limit,
-            |p, t_limit, first, end, _, mask| {
-                // The packet's rays that entered this leaf.
-                let entering = _mm256_and_ps(mask, rays_mask);
-                // The leaf's entries start at a multiple of four (`flatten`): pack k / 4 holds
-                // entries k..k + 4, triangles first, then spheres.
-                for k in (first..end).step_by(4) {
-                    let pack = &scene.packs[k / 4];
-                    let mut tris = pack.triangles;
-                    while tris != 0 {
-                        let tl = tris.trailing_zeros() as usize;
-                        tris &= tris - 1;
-                        let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
-                        let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        let candidate = _mm256_and_ps(h.hit, entering);
-                        let prim = scene.prims[k + tl];
-                        keep_nearer(&mut best, t_limit, candidate, (h.t, h.b1, h.b2), prim);
-                    }
-                    let mut spheres = pack.spheres;
-                    while spheres != 0 {
-                        let sl = spheres.trailing_zeros() as usize;
-                        spheres &= spheres - 1;
-                        let prim = scene.prims[k + sl];
-                        let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
-                        let candidate = _mm256_and_ps(h.hit, entering);
-                        let zero = _mm256_setzero_ps();
-                        keep_nearer(&mut best, t_limit, candidate, (h.t, zero, zero), prim);
-                    }
+        let leaf = |best: &mut Nearest,
+                    p: &mut Packet,
+                    t_limit: &mut __m256,
+                    first: usize,
+                    end: usize,
+                    _: i32,
+                    mask: __m256| {
+            // The packet's rays that entered this leaf.
+            let entering = _mm256_and_ps(mask, rays_mask);
+            // The leaf's entries start at a multiple of four (`flatten`): pack k / 4 holds
+            // entries k..k + 4, triangles first, then spheres.
+            for k in (first..end).step_by(4) {
+                let pack = &scene.packs[k / 4];
+                let mut tris = pack.triangles;
+                while tris != 0 {
+                    let tl = tris.trailing_zeros() as usize;
+                    tris &= tris - 1;
+                    let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
+                    let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
+                    let candidate = _mm256_and_ps(h.hit, entering);
+                    let prim = scene.prims[k + tl];
+                    keep_nearer(best, t_limit, candidate, (h.t, h.b1, h.b2), prim);
                 }
-            },
-        );
+                let mut spheres = pack.spheres;
+                while spheres != 0 {
+                    let sl = spheres.trailing_zeros() as usize;
+                    spheres &= spheres - 1;
+                    let prim = scene.prims[k + sl];
+                    let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
+                    let candidate = _mm256_and_ps(h.hit, entering);
+                    let zero = _mm256_setzero_ps();
+                    keep_nearer(best, t_limit, candidate, (h.t, zero, zero), prim);
+                }
+            }
+        };
+        let single =
+            |best: &mut Nearest, p: &mut Packet, t_limit: &mut __m256, node: u32, lanes: i32| {
+                single_rays(scene, p, t_limit, best, node, lanes)
+            };
+        traverse::<true, LARGE, _>(scene, &mut p, &mut t_limit, &mut best, leaf, single);
         (
             lanes(t_limit),
             lanes(best.b1),
             lanes(best.b2),
             prims(best.prim),
         )
+    }
+
+    /// The lanes `bits` of the packet go on alone below wide node `node`, each from its nearest
+    /// hit so far (`bvh::closest_below`): where few of a packet's rays enter a subtree, one
+    /// ray's traversal tests a node's boxes in a quarter of the work of the packet's.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn single_rays(
+        scene: &FlatScene,
+        p: &Packet,
+        t_limit: &mut __m256,
+        best: &mut Nearest,
+        node: u32,
+        bits: i32,
+    ) {
+        let o = [lanes(p.o[0]), lanes(p.o[1]), lanes(p.o[2])];
+        let d = [lanes(p.d[0]), lanes(p.d[1]), lanes(p.d[2])];
+        let (mut t, mut b1, mut b2, mut prim) = (
+            lanes(*t_limit),
+            lanes(best.b1),
+            lanes(best.b2),
+            prims(best.prim),
+        );
+        for l in lanes_of(bits as u32) {
+            let ray = Ray {
+                o: glam::Vec3::new(o[0][l], o[1][l], o[2][l]),
+                d: glam::Vec3::new(d[0][l], d[1][l], d[2][l]),
+            };
+            let held = (prim[l] != NO_PRIM).then_some(Candidate {
+                t: t[l],
+                prim: prim[l],
+                b1: b1[l],
+                b2: b2[l],
+            });
+            if let Some(c) = closest_below(scene, &ray, node, t[l], held) {
+                (t[l], b1[l], b2[l], prim[l]) = (c.t, c.b1, c.b2, c.prim);
+            }
+        }
+        // SAFETY: eight f32 (or their bits) each.
+        unsafe {
+            *t_limit = _mm256_loadu_ps(t.as_ptr());
+            best.b1 = _mm256_loadu_ps(b1.as_ptr());
+            best.b2 = _mm256_loadu_ps(b2.as_ptr());
+            best.prim = _mm256_loadu_ps(prim.as_ptr().cast());
+        }
     }
 
     /// A primitive's hits (`hit` at `t` with error bound `t_err`) that lie within the segment,
@@ -730,7 +888,7 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn occluded(scene: &FlatScene, rays: &[Ray], blocked: &mut [bool]) {
-        let hit = occluded_packet(scene, load(rays));
+        let hit = occluded_in(scene, load(rays));
         for (l, b) in blocked.iter_mut().enumerate() {
             *b = hit & (1 << l) != 0;
         }
@@ -742,44 +900,72 @@ mod avx {
     /// The CPU must have AVX.
     #[target_feature(enable = "avx")]
     pub unsafe fn occluded_lanes(scene: &FlatScene, (o, d): (&V8, &V8), lanes: u32) -> u32 {
-        occluded_packet(scene, from_lanes((o, d), lanes)) as u32
+        occluded_in(scene, from_lanes((o, d), lanes)) as u32
+    }
+
+    /// [`occluded_packet`] for the size of the scene's tree ([`LARGE_TREE_NODES`]).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn occluded_in(scene: &FlatScene, p: Packet) -> i32 {
+        if scene.nodes.len() > LARGE_TREE_NODES {
+            occluded_packet::<true>(scene, p)
+        } else {
+            occluded_packet::<false>(scene, p)
+        }
     }
 
     /// The traversal of [`occluded`]: the blocked lanes' bits.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn occluded_packet(scene: &FlatScene, mut p: Packet) -> i32 {
+    fn occluded_packet<const LARGE: bool>(scene: &FlatScene, mut p: Packet) -> i32 {
         let mut t_limit = _mm256_set1_ps(1.0);
         let mut hit = 0i32;
-        traverse(
-            scene,
-            &mut p,
-            &mut t_limit,
-            |p, t_limit, first, end, entered, _| {
-                for k in (first..end).step_by(4) {
-                    let pack = &scene.packs[k / 4];
-                    let mut tris = pack.triangles;
-                    while tris != 0 && p.active != 0 {
-                        let tl = tris.trailing_zeros() as usize;
-                        tris &= tris - 1;
-                        let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
-                        let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
-                        stop_blocked(p, &mut hit, (h.hit, h.t, h.t_err), *t_limit, entered);
-                    }
-                    let mut spheres = pack.spheres;
-                    while spheres != 0 && p.active != 0 {
-                        let sl = spheres.trailing_zeros() as usize;
-                        spheres &= spheres - 1;
-                        let prim = scene.prims[k + sl];
-                        let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
-                        stop_blocked(p, &mut hit, (h.hit, h.t, h.t_err), *t_limit, entered);
-                    }
-                    if p.active == 0 {
-                        return;
-                    }
+        let leaf = |hit: &mut i32,
+                    p: &mut Packet,
+                    t_limit: &mut __m256,
+                    first: usize,
+                    end: usize,
+                    entered: i32,
+                    _: __m256| {
+            for k in (first..end).step_by(4) {
+                let pack = &scene.packs[k / 4];
+                let mut tris = pack.triangles;
+                while tris != 0 && p.active != 0 {
+                    let tl = tris.trailing_zeros() as usize;
+                    tris &= tris - 1;
+                    let corner = |v: &[glam::Vec4; 3]| [v[0][tl], v[1][tl], v[2][tl]];
+                    let h = triangle(p, corner(&pack.v0), corner(&pack.e1), corner(&pack.e2));
+                    stop_blocked(p, hit, (h.hit, h.t, h.t_err), *t_limit, entered);
                 }
-            },
-        );
+                let mut spheres = pack.spheres;
+                while spheres != 0 && p.active != 0 {
+                    let sl = spheres.trailing_zeros() as usize;
+                    spheres &= spheres - 1;
+                    let prim = scene.prims[k + sl];
+                    let h = sphere(p, &scene.spheres[(prim & !PRIM_SPHERE_BIT) as usize]);
+                    stop_blocked(p, hit, (h.hit, h.t, h.t_err), *t_limit, entered);
+                }
+                if p.active == 0 {
+                    return;
+                }
+            }
+        };
+        let single = |hit: &mut i32, p: &mut Packet, t_limit: &mut __m256, node: u32, bits: i32| {
+            let t = lanes(*t_limit);
+            let o = [lanes(p.o[0]), lanes(p.o[1]), lanes(p.o[2])];
+            let d = [lanes(p.d[0]), lanes(p.d[1]), lanes(p.d[2])];
+            for l in lanes_of(bits as u32) {
+                let ray = Ray {
+                    o: glam::Vec3::new(o[0][l], o[1][l], o[2][l]),
+                    d: glam::Vec3::new(d[0][l], d[1][l], d[2][l]),
+                };
+                if occluded_below(scene, &ray, node, t[l]) {
+                    *hit |= 1 << l;
+                    p.active &= !(1 << l);
+                }
+            }
+        };
+        traverse::<false, LARGE, _>(scene, &mut p, &mut t_limit, &mut hit, leaf, single);
         hit
     }
 
@@ -889,9 +1075,9 @@ mod tests {
 
     /// 400 triangles in unit cubes over [0, 10)³, every tenth sharing an edge with the one
     /// before (so that rays through the edge meet two triangles at the same t), and spheres.
-    fn scene() -> FlatScene {
+    fn scene(triangles: u32) -> FlatScene {
         let mut tris: Vec<Triangle> = Vec::new();
-        for i in 0..400u32 {
+        for i in 0..triangles {
             let c = Vec3::new(rnd(1, i, 0), rnd(1, i, 1), rnd(1, i, 2)) * 10.0;
             let v = |k| (c + Vec3::new(rnd(1, i, k), rnd(1, i, k + 1), rnd(1, i, k + 2))).into();
             let t = if i % 10 == 1 {
@@ -914,6 +1100,11 @@ mod tests {
         FlatScene::from_tree(tris, spheres, nodes, prims)
     }
 
+    /// The shared edges the rays go through: triangles 10k and 10k + 1, k below this.
+    fn pairs(scene: &FlatScene) -> u32 {
+        (scene.triangles.len() as u32 / 10).min(40)
+    }
+
     /// Rays of every kind a packet meets: from anywhere in the scene in any direction, along
     /// the axes (direction components exactly 0), through the midpoints of shared edges, and
     /// shadow segments between points of the scene.
@@ -930,7 +1121,7 @@ mod tests {
                     }
                     1 => {
                         // Through the middle of the edge triangles 10k and 10k + 1 share.
-                        let t = scene.triangles[(i / 5 % 40 * 10) as usize];
+                        let t = scene.triangles[(i / 5 % pairs(scene) * 10) as usize];
                         let mid = (Vec3::from(t.v1) + Vec3::from(t.v2)) * 0.5;
                         d = mid - o;
                     }
@@ -949,11 +1140,21 @@ mod tests {
     /// primitive and point, bit for bit; of two hits at the same t, both the lower primitive
     /// id) and the same answer for a shadow segment. The rays go in packets of every size from
     /// 1 to 8, so lanes past the rays are covered too. Of the rays through shared edges, those
-    /// that meet both triangles at exactly the same t are counted: they must occur.
+    /// that meet both triangles at exactly the same t are counted: they must occur. Three trees:
+    /// a small one (`LARGE_TREE_NODES`), a large one, and one over `PACKED_LEAVES_ABOVE`
+    /// primitives of full leaves, deep enough that packets hand most rays on to single rays.
     #[test]
     fn packets_find_what_the_scalar_traversal_finds() {
-        let scene = scene();
-        let rays = rays(&scene);
+        for triangles in [40, 400, 6000] {
+            let scene = scene(triangles);
+            let large = scene.nodes.len() > LARGE_TREE_NODES;
+            assert_eq!(large, triangles > 40, "{} nodes", scene.nodes.len());
+            packets_agree_with_the_scalar_traversal(&scene);
+        }
+    }
+
+    fn packets_agree_with_the_scalar_traversal(scene: &FlatScene) {
+        let rays = rays(scene);
         let mut ties = 0;
         let mut start = 0;
         let mut size = 1;
@@ -961,15 +1162,26 @@ mod tests {
             let chunk = &rays[start..(start + size).min(rays.len())];
             let mut hits = vec![None; chunk.len()];
             let mut blocked = vec![false; chunk.len()];
-            intersect_closest_packets(&scene, chunk, &mut hits);
-            occluded_all(&scene, chunk, &mut blocked);
+            intersect_closest_packets(scene, chunk, &mut hits);
+            occluded_all(scene, chunk, &mut blocked);
+            let n = scene.triangles.len();
             for (k, ray) in chunk.iter().enumerate() {
-                let want = intersect_closest(&scene, ray, f32::MAX);
+                let want = intersect_closest(scene, ray, f32::MAX);
                 let key = |h: &Option<SurfaceHit>| h.map(|h| (h.t, h.prim, h.p, h.n));
-                assert_eq!(key(&hits[k]), key(&want), "ray {}", start + k);
-                assert_eq!(blocked[k], occluded(&scene, ray, 1.0), "ray {}", start + k);
+                assert_eq!(
+                    key(&hits[k]),
+                    key(&want),
+                    "{n} triangles, ray {}",
+                    start + k
+                );
+                assert_eq!(
+                    blocked[k],
+                    occluded(scene, ray, 1.0),
+                    "{n} triangles, ray {}",
+                    start + k
+                );
                 if (start + k) % 5 == 1 {
-                    let pair = (start + k) as u32 / 5 % 40 * 10;
+                    let pair = (start + k) as u32 / 5 % pairs(scene) * 10;
                     let t = |i: u32| {
                         let tri = &scene.triangles[i as usize];
                         crate::math::geometry::intersect_triangle(ray, tri).map(|h| h.t)
@@ -985,7 +1197,8 @@ mod tests {
         // 29 with these fixed streams.
         assert!(
             ties >= 20,
-            "{ties} rays met a shared edge's triangles at one t"
+            "{ties} rays met a shared edge's triangles at one t ({} triangles)",
+            scene.triangles.len()
         );
     }
 
