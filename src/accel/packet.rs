@@ -24,7 +24,7 @@
 //! the hits found first. Where only [`SINGLE_RAY_LANES`] of the packet's rays enter a subtree, those
 //! rays go on alone below it ([`crate::accel::bvh::closest_below`],
 //! [`crate::accel::bvh::occluded_below`]): deep in a large mesh the rays of a packet part ways, and
-//! a node costs one ray an eighth of the packet's slab tests (Benthin et al. 2012, "Combining single
+//! a node costs one ray a quarter of the packet's slab tests (Benthin et al. 2012, "Combining single
 //! and packet-ray tracing for arbitrary ray distributions on the Intel MIC architecture").
 //!
 //! Needs AVX (checked at run time, so the portable build uses it too); elsewhere each ray takes
@@ -41,14 +41,15 @@ pub const PACKET: usize = 8;
 /// Trees of more four-wide nodes than this are large: there a packet's closest-hit traversal
 /// visits children nearest first, and rays go on alone below a node that few of them enter. In
 /// a small tree a packet's rays stay coherent down to the leaves, and both cost more than they
-/// save: 0.94 – 0.97x camera paths/s on the three reference rooms (7 – 8 nodes) with them, 1.37 –
-/// 1.41x on bunny_room (1 699 nodes) and bunny_room_1m (docs/journal/2026-11-29_meshes.md).
+/// save: with them the three reference rooms (7 – 13 nodes) ran at 0.94 – 0.97x the camera paths/s;
+/// with them on large trees only, bunny_room (1 699 nodes) and bunny_room_1m run at 1.40x and
+/// 1.35x, the rooms level (docs/journal/2026-11-29_meshes.md).
 pub const LARGE_TREE_NODES: usize = 64;
 
 /// In a large tree ([`LARGE_TREE_NODES`]), a subtree that at most this many of a packet's rays
-/// enter is traversed by each of them alone.
-/// One lane: in a render of bunny_room_1m with two lanes the camera paths/s were 0.96 of one
-/// lane's, and on the reference rooms the same (docs/journal/2026-11-29_meshes.md).
+/// enter is traversed by each of them alone. One lane: with two, a render of bunny_room_1m ran at
+/// 0.96 of the camera paths/s, bunny_room at 0.98 and tncg15_room at 0.94
+/// (docs/journal/2026-11-29_meshes.md).
 pub const SINGLE_RAY_LANES: u32 = 1;
 
 /// The nearest hit of each ray (`t` in (its error bound, f32::MAX)), as
@@ -463,8 +464,9 @@ mod avx {
     /// [`super::SINGLE_RAY_LANES`] active lanes enter goes to `single(state, packet, t_limit,
     /// node, lanes)` instead, which traces those lanes alone, and in closest-hit mode (`CLOSEST`)
     /// the interior children are visited nearest first, a popped node that every active lane's
-    /// nearest hit has since passed dropped. Otherwise, and in any-hit mode, slot order (ordered, shadow packets took
-    /// 1.2 – 1.6 times as long in `examples/packet_rays.rs`: any hit stops a lane, so the order culls nothing).
+    /// nearest hit has since passed dropped. Otherwise, and in any-hit mode, slot order (ordered,
+    /// shadow packets took 1.2 – 1.6 times as long in `examples/packet_rays.rs`: any hit stops a
+    /// lane, so the order culls nothing).
     #[inline]
     #[target_feature(enable = "avx")]
     fn traverse<const CLOSEST: bool, const LARGE: bool, S>(
