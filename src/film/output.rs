@@ -80,8 +80,13 @@ pub fn check_writable(out: &Path, variance: bool) -> Result<()> {
     Ok(())
 }
 
-/// Writes `bytes_of(tmp)` with `write` and renames it over `path`.
+/// Writes `bytes_of(tmp)` with `write` and renames it over `path`. A `path` that is neither a
+/// regular file nor a folder (a device such as `/dev/null`, a named pipe) is written in place:
+/// renaming over it would replace the device with a file.
 pub(crate) fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    if is_special(path) {
+        return write(path);
+    }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
     if let Some(d) = dir {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
@@ -102,6 +107,11 @@ pub(crate) fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Whether `path` (followed through links) exists and is neither a regular file nor a folder.
+fn is_special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
 }
 
 /// Writes 8-bit RGB pixels (row 0 at the top) as a PNG, atomically.
@@ -388,6 +398,29 @@ pub fn write_png(path: &Path, image: &RgbImage, exposure: f32) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An output named `/dev/null` is written into the device, not renamed over it (which would
+    /// leave a regular file in its place); a regular file is still replaced whole.
+    #[cfg(unix)]
+    #[test]
+    fn writing_to_a_device_leaves_the_device_in_place() {
+        use std::os::unix::fs::FileTypeExt;
+        let null = Path::new("/dev/null");
+        assert!(is_special(null));
+        write_text(null, "{}").unwrap();
+        let kind = std::fs::metadata(null).unwrap().file_type();
+        assert!(kind.is_char_device(), "/dev/null is no longer a device");
+
+        let dir = std::env::temp_dir().join(format!("hexray-special-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("out.json");
+        assert!(!is_special(&file), "a path that does not exist yet");
+        write_text(&file, "old and longer").unwrap();
+        assert!(!is_special(&file));
+        write_text(&file, "new").unwrap();
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "new");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn exr_round_trips_pixels_and_metadata() {
