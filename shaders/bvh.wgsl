@@ -1,5 +1,5 @@
 // The BVH traversal: `src/accel/bvh.rs`, one traversal with a closest-hit and an any-hit mode: the four
-// children's boxes tested at once, the nearest interior child first, an explicit stack in a
+// children's boxes tested at once, the interior children nearest first, an explicit stack in a
 // private array.
 
 // Specialised by the host to `bvh::stack_size`: the traversal pushes at most three nodes per
@@ -31,9 +31,12 @@ struct Candidate {
 // At each node the four children's boxes are tested at once. The leaves among the hit children
 // are tested first, so that their hits lower best.t before anything is pushed; then the nearest
 // hit interior child is visited next and the others are pushed with their entry distances (bits
-// in .y): a missed child is never pushed and a pushed one that a closer hit has since passed is
-// dropped when popped. Only the nearest child is chosen by distance: sorting all four was measured
-// slower on the CPU for the little culling it adds (docs/journal/2026-11-23_cpu_traversal.md).
+// in .y), in decreasing distance, so that the nearest of them pops first: a missed child is never
+// pushed and a pushed one that a closer hit has since passed is dropped when popped. The CPU's
+// scalar traversal pushes the others in slot order, where sorting measured slower
+// (docs/journal/2026-11-23_cpu_traversal.md); here, on lavapipe, the sorted pushes gave 1.2 -
+// 1.4x the camera paths/s on every scene (docs/journal/2026-11-29_meshes.md). The nearest hit is
+// the same either way (`bvh::nearer`).
 fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
     var best = Candidate(false, t_max, 0u, 0.0, 0.0);
     let inv_d = safe_inverse(ray.d);
@@ -98,22 +101,33 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
         }
         var next = NO_NODE;
         var t_next = 0.0;
+        let base = sp;
         while inner != 0u {
             let c = countTrailingZeros(inner);
             inner &= inner - 1u;
             if t_enter[c] > best.t {
                 continue;
             }
-            if next != NO_NODE && t_next <= t_enter[c] {
-                stack[sp] = vec2<u32>(node.child[c], bitcast<u32>(t_enter[c]));
-                sp += 1u;
-            } else {
-                if next != NO_NODE {
-                    stack[sp] = vec2<u32>(next, bitcast<u32>(t_next));
-                    sp += 1u;
+            var entry = vec2<u32>(node.child[c], bitcast<u32>(t_enter[c]));
+            if next == NO_NODE || t_enter[c] < t_next {
+                if next == NO_NODE {
+                    next = node.child[c];
+                    t_next = t_enter[c];
+                    continue;
                 }
+                entry = vec2<u32>(next, bitcast<u32>(t_next));
                 next = node.child[c];
                 t_next = t_enter[c];
+            }
+            // This node's pushes in decreasing entry distance: the nearest pops first.
+            var j = sp;
+            stack[sp] = entry;
+            sp += 1u;
+            while j > base && bitcast<f32>(stack[j - 1u].y) < bitcast<f32>(stack[j].y) {
+                let held = stack[j - 1u];
+                stack[j - 1u] = stack[j];
+                stack[j] = held;
+                j -= 1u;
             }
         }
         // Descend into the nearest interior child, or pop the most recently pushed one that the
