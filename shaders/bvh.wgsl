@@ -32,11 +32,10 @@ struct Candidate {
 // are tested first, so that their hits lower best.t before anything is pushed; then the nearest
 // hit interior child is visited next and the others are pushed with their entry distances (bits
 // in .y), in decreasing distance, so that the nearest of them pops first: a missed child is never
-// pushed and a pushed one that a closer hit has since passed is dropped when popped. The CPU's
-// scalar traversal pushes the others in slot order, where sorting measured slower
-// (docs/journal/2026-11-23_cpu_traversal.md); here, on lavapipe, the sorted pushes gave 1.2 -
-// 1.4x the camera paths/s on every scene (docs/journal/2026-11-29_meshes.md). The nearest hit is
-// the same either way (`bvh::nearer`).
+// pushed and a pushed one that a closer hit has since passed is dropped when popped. On lavapipe
+// the sorted pushes gave 1.2 - 1.4x the camera paths/s of pushes in slot order on every scene; on
+// the CPU they measured level (docs/journal/2026-11-29_meshes.md). The nearest hit is the same
+// either way (`bvh::nearer`).
 fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
     var best = Candidate(false, t_max, 0u, 0.0, 0.0);
     let inv_d = safe_inverse(ray.d);

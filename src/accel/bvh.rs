@@ -475,10 +475,11 @@ pub(crate) fn occluded_below(scene: &FlatScene, ray: &Ray, start: u32, t_max: f3
 /// made of, docs/journal/2026-11-25_wide_nodes.md). At each node the children's boxes are tested at
 /// once. The leaves among the hit children are tested first, so that their hits lower t_limit
 /// before anything is pushed; then the nearest hit interior child is visited next and the others
-/// are pushed with their entry distances: a missed child is never pushed and a pushed one that a
-/// closer hit has since passed is dropped when popped. Only the nearest child is chosen by
-/// distance: sorting all four costs more (the keys' lanes travel through memory) than the little
-/// culling it adds. A leaf's triangles are tested four at a time ([`intersect_triangles4`], bit for
+/// are pushed with their entry distances, in decreasing distance, so that the nearest of them pops
+/// first: a missed child is never pushed and a pushed one that a closer hit has since passed is
+/// dropped when popped. The order is `shaders/bvh.wgsl`'s, where it gave lavapipe 1.2 – 1.4x;
+/// here it measured level with pushes in slot order (docs/journal/2026-11-29_meshes.md). A leaf's
+/// triangles are tested four at a time ([`intersect_triangles4`], bit for
 /// bit the scalar test per lane; 15 – 18 % less render time than one at a time) and their hits
 /// reported in entry order, so the result is the scalar traversal's. Both measured in
 /// docs/journal/2026-11-23_cpu_traversal.md. `on_hit(prim, t, t_err, b1, b2, &mut t_limit)` decides
@@ -566,20 +567,31 @@ fn traverse(
             }
         }
         let mut next: Option<(u32, f32)> = None;
+        let base = stack.len();
         while inner != 0 {
             let c = inner.trailing_zeros() as usize;
             inner &= inner - 1;
             if t_enter[c] > t_limit {
                 continue;
             }
-            let child = (node.child[c], t_enter[c]);
+            let mut entry = (node.child[c], t_enter[c]);
             match next {
-                Some(n) if n.1 <= child.1 => stack.push(child),
-                Some(n) => {
-                    stack.push(n);
-                    next = Some(child);
+                None => {
+                    next = Some(entry);
+                    continue;
                 }
-                None => next = Some(child),
+                Some(n) if entry.1 < n.1 => {
+                    next = Some(entry);
+                    entry = n;
+                }
+                Some(_) => {}
+            }
+            // This node's pushes in decreasing entry distance: the nearest pops first.
+            let mut j = stack.len();
+            stack.push(entry);
+            while j > base && stack[j - 1].1 < stack[j].1 {
+                stack.swap(j - 1, j);
+                j -= 1;
             }
         }
         // Descend into the nearest interior child, or pop the most recently pushed one that the
