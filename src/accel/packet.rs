@@ -498,7 +498,12 @@ mod avx {
                 (0.0, p.active)
             };
             // (The nearest hit of every active lane has since passed the node's box.)
-            if LARGE && CLOSEST && key > hmax(_mm256_and_ps(*t_limit, bits_to_mask(p.active))) {
+            if LARGE
+                && CLOSEST
+                && _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_set1_ps(key), *t_limit))
+                    & p.active
+                    == 0
+            {
                 continue;
             }
             if LARGE && (entering & p.active).count_ones() <= super::SINGLE_RAY_LANES {
@@ -588,16 +593,6 @@ mod avx {
         let m = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
         let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
         let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
-        _mm256_cvtss_f32(m)
-    }
-
-    /// The greatest of a vector's lanes.
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn hmax(v: __m256) -> f32 {
-        let m = _mm256_max_ps(v, _mm256_permute2f128_ps::<1>(v, v));
-        let m = _mm256_max_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
-        let m = _mm256_max_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
         _mm256_cvtss_f32(m)
     }
 

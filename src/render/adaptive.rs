@@ -241,7 +241,8 @@ pub fn render_adaptive(
         };
         // The next round, once the last is spent.
         if round.as_ref().is_none_or(|(_, phi)| *phi >= 1.0) {
-            let mut b = if film.mean_spp() == 0.0 {
+            let warm_up = film.mean_spp() == 0.0;
+            let mut b = if warm_up {
                 target.map_or(WARM_UP_SPP, |t| ((t / 8.0) as u32).max(WARM_UP_SPP))
             } else {
                 (done.round() as u32).max(2)
@@ -249,7 +250,7 @@ pub fn render_adaptive(
             if let Some(t) = target {
                 b = b.min((t - done).round().max(1.0) as u32);
             }
-            let r = if film.mean_spp() == 0.0 {
+            let r = if warm_up {
                 Round::uniform(film, b)
             } else {
                 Round::plan(film, b, rounds, settings)
