@@ -59,6 +59,27 @@ step "bench 512x512, gpu"
     --out "$out/bench_512.json" > "$out/bench_512.txt" 2>&1
 cat "$out/bench_512.txt"
 
+# Issue 46's first image, as a user runs it: the whole process, cold (the driver's shader cache
+# pointed at an empty folder: NVIDIA's and Mesa's) and then twice warm. Each run's log says the
+# adapter's time, the kernel's build, the first pass and the rate after it apart.
+step "first image: tncg15_room 800x800, 50 spp, path, cold then warm"
+cold_cache=$(mktemp -d)
+for run in cold warm1 warm2; do
+    if [ "$run" = cold ]; then
+        cache=(env __GL_SHADER_DISK_CACHE_PATH="$cold_cache" MESA_SHADER_CACHE_DIR="$cold_cache")
+    else
+        cache=(env)
+    fi
+    start=$(date +%s%N)
+    "${cache[@]}" "$hexray" render scenes/tncg15_room.json --backend gpu --method path \
+        --width 800 --height 800 --spp 50 --out "$out/first_image_$run.exr" \
+        > "$out/first_image_$run.txt" 2>&1
+    echo "process milliseconds $((($(date +%s%N) - start) / 1000000))" >> "$out/first_image_$run.txt"
+    grep -E 'adapter and device|kernel built|^rendered|^first pass|process milliseconds' \
+        "$out/first_image_$run.txt" | sed "s/^/$run: /"
+done
+rm -rf "$cold_cache"
+
 step "issue 7's goal: tncg15_room 800x800, 50 spp, path (after bench's 1-spp warm-up)"
 "$hexray" bench scenes/tncg15_room.json --backend gpu --width 800 --height 800 \
     --spp "${GOAL_SPP:-50}" --out "$out/bench_800.json" > "$out/bench_800.txt" 2>&1

@@ -276,6 +276,44 @@ fn gpu_backend_renders_and_records_its_adapter() {
     assert_eq!(meta.get("spp"), Some("2"));
 }
 
+/// A GPU render says apart what a session pays once: the adapter and device, the kernel's
+/// build, and its first pass (where a driver that compiles at the first dispatch compiles),
+/// then the rate of the passes after it (issue 46's first-image times).
+#[test]
+fn a_gpu_render_reports_its_start_up_and_first_pass_apart() {
+    if crate::common::gpu().is_none() {
+        return;
+    }
+    let dir = temp_dir!("first_pass");
+    let o = hexray()
+        .args([
+            "--backend",
+            "gpu",
+            "--method",
+            "path",
+            "--spp",
+            "3",
+            "--width",
+            "16",
+            "--height",
+            "16",
+        ])
+        .arg("--out")
+        .arg(dir.join("f.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    for line in [
+        "hexray: adapter and device in ",
+        "hexray: kernel built in ",
+        "first pass 1 spp in ",
+        "; the other 2 spp at ",
+    ] {
+        assert!(err.contains(line), "no {line:?} in:\n{err}");
+    }
+}
+
 /// `auto` does not pick a software adapter (lavapipe): it runs the kernel on the same cores as
 /// the CPU backend, slower. The line says which adapter it passed over and why.
 #[test]

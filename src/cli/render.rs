@@ -368,7 +368,14 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     // The last check before any work: the outputs can be written (not found after the render).
     output::check_writable(&out, args.variance)
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
+    let acquired = std::time::Instant::now();
     let gpu = choose_gpu(args)?;
+    if gpu.is_some() && !args.quiet {
+        eprintln!(
+            "hexray: adapter and device in {:.2} s",
+            acquired.elapsed().as_secs_f64()
+        );
+    }
     // Without --radius, a hardware GPU merges within a share of the default
     // (`merging::HARDWARE_GPU_RADIUS_SCALE`): its renders run many more iterations. photon-map's
     // radius, whose bias no number of iterations removes, is the same on every backend.
@@ -966,6 +973,23 @@ fn summarise(
         paths / report.seconds / 1e6,
         film.dropped(),
     );
+    if let Some(first) = report.first_pass {
+        let rest = report.seconds - first.seconds;
+        let rest_spp = (film.spp() - before) as f64 - first.spp;
+        let rate = if rest > 0.0 && rest_spp > 0.0 {
+            format!(
+                "; the other {rest_spp:.0} spp at {:.3} M camera paths/s",
+                rest_spp * pixels as f64 / rest / 1e6
+            )
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "first pass {:.0} spp in {:.3} s (start-up included, such as a GPU driver \
+             compiling the kernel at its first dispatch){rate}",
+            first.spp, first.seconds
+        );
+    }
     eprintln!(
         "image mean RGB {:.4} {:.4} {:.4} (s.e. {:.1e} {:.1e} {:.1e})",
         mean[0], mean[1], mean[2], se[0], se[1], se[2]

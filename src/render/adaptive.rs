@@ -32,7 +32,7 @@
 //! budget); each later round spends as many as all rounds before it, so the counts are decided
 //! from at least half of the samples, and the last is cut to the budget.
 
-use super::{pass_size, Backend, Budget, ErrorTarget, RenderReport, StopReason};
+use super::{pass_size, Backend, Budget, ErrorTarget, FirstPass, RenderReport, StopReason};
 pub use crate::film::PixelRun;
 use crate::film::{Film, RELMSE_EPSILON};
 use crate::math::sampling::pcg4d;
@@ -224,6 +224,7 @@ pub fn render_adaptive(
     let mut round: Option<(Round, f64)> = None;
     let mut rounds = 0u32;
     let mut per_spp = None::<f64>;
+    let mut first_pass = None;
     let reason = loop {
         if stop.load(Ordering::SeqCst) {
             break StopReason::Interrupted;
@@ -278,7 +279,9 @@ pub fn render_adaptive(
         // pixel's share rounded down to nothing: the next pass is sized as the first).
         if wanted > 0 {
             let spp = wanted as f64 / film.pixels.len() as f64;
-            per_spp = Some(t0.elapsed().as_secs_f64() / spp);
+            let seconds = t0.elapsed().as_secs_f64();
+            per_spp = Some(seconds / spp);
+            first_pass.get_or_insert(FirstPass { spp, seconds });
         }
         done += (next - *phi) * r.budget as f64;
         *phi = next;
@@ -288,6 +291,7 @@ pub fn render_adaptive(
         spp: done.round() as u32,
         seconds: start.elapsed().as_secs_f64(),
         reason,
+        first_pass,
     }
 }
 

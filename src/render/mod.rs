@@ -86,6 +86,17 @@ pub struct RenderReport {
     pub spp: u32,
     pub seconds: f64,
     pub reason: StopReason,
+    /// The first pass of this session, reported apart: it carries what a session pays once
+    /// (a GPU driver's compilation of the kernel at its first dispatch, the thread pool's start).
+    pub first_pass: Option<FirstPass>,
+}
+
+/// The first completed pass of a session: its samples per pixel (the mean over the pixels for
+/// an adaptive render) and its seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstPass {
+    pub spp: f64,
+    pub seconds: f64,
 }
 
 /// A pass aims at this duration, so that Ctrl-C and a time budget take effect promptly.
@@ -107,6 +118,7 @@ pub fn render_progressive(
     let mut done = film.spp() as u32;
     let target = budget.spp.map(|s| done + s);
     let mut per_spp = None::<f64>;
+    let mut first_pass = None;
     let reason = loop {
         if stop.load(Ordering::SeqCst) {
             break StopReason::Interrupted;
@@ -141,6 +153,10 @@ pub fn render_progressive(
         // The first pass includes warm-up (thread pool start, shader compilation): measure
         // the cost again on every pass and keep the latest.
         per_spp = Some(dt / count as f64);
+        first_pass.get_or_insert(FirstPass {
+            spp: count as f64,
+            seconds: dt,
+        });
         done += count;
         on_pass(film, done, start.elapsed().as_secs_f64());
     };
@@ -148,6 +164,7 @@ pub fn render_progressive(
         spp: film.spp() as u32,
         seconds: start.elapsed().as_secs_f64(),
         reason,
+        first_pass,
     }
 }
 
