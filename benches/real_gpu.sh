@@ -11,7 +11,8 @@
 #           `cargo test --release --no-run`); left out when unset
 #   STAGES  a build with `--features stage-times` (where a bidirectional iteration's time
 #           goes, stage by stage); left out when unset
-# CURVES=0 leaves out the references and the curves (about 4 of the 7 minutes).
+# CURVES=0 leaves out the references and the curves (about 4 of the 7 minutes);
+# FIRST_IMAGE_SIZE (default 800) sizes the first-image step.
 # SECONDS_PER_CURVE (default 8), REFERENCE_SECONDS (default 30), BENCH_SPP (default 64, at
 # 256x256), BENCH_SPP_512 (default 256, GPU only) and GOAL_SPP (default 50, at 800x800) size
 # the run. The tests find the scenes through the path they were built in; where the checkout
@@ -63,7 +64,7 @@ cat "$out/bench_512.txt"
 # Issue 46's first image, as a user runs it: the whole process, cold (the driver's shader cache
 # pointed at an empty folder: NVIDIA's and Mesa's) and then twice warm. Each run's log says the
 # adapter's time, the kernel's build, the first pass and the rate after it apart.
-step "first image: tncg15_room 800x800, 50 spp, path, cold then warm"
+step "first image: tncg15_room ${FIRST_IMAGE_SIZE:-800}x${FIRST_IMAGE_SIZE:-800}, ${GOAL_SPP:-50} spp, path, cold then warm"
 cold_cache=$(mktemp -d)
 for run in cold warm1 warm2; do
     if [ "$run" = cold ]; then
@@ -73,7 +74,8 @@ for run in cold warm1 warm2; do
     fi
     start=$(date +%s%N)
     "${cache[@]}" "$hexray" render scenes/tncg15_room.json --backend gpu --method path \
-        --width 800 --height 800 --spp 50 --out "$out/first_image_$run.exr" \
+        --width "${FIRST_IMAGE_SIZE:-800}" --height "${FIRST_IMAGE_SIZE:-800}" \
+        --spp "${GOAL_SPP:-50}" --out "$out/first_image_$run.exr" \
         > "$out/first_image_$run.txt" 2>&1
     echo "process milliseconds $((($(date +%s%N) - start) / 1000000))" >> "$out/first_image_$run.txt"
     grep -E 'adapter and device|kernel built|^rendered|^first pass|process milliseconds' \
