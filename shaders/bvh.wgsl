@@ -108,12 +108,12 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
                 continue;
             }
             var entry = vec2<u32>(node.child[c], bitcast<u32>(t_enter[c]));
-            if next == NO_NODE || t_enter[c] < t_next {
-                if next == NO_NODE {
-                    next = node.child[c];
-                    t_next = t_enter[c];
-                    continue;
-                }
+            if next == NO_NODE {
+                next = node.child[c];
+                t_next = t_enter[c];
+                continue;
+            }
+            if t_enter[c] < t_next {
                 entry = vec2<u32>(next, bitcast<u32>(t_next));
                 next = node.child[c];
                 t_next = t_enter[c];

@@ -586,6 +586,25 @@ mod avx {
         }
     }
 
+    /// The packet's origins and directions as rows of eight, for [`ray_at`].
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn rows(p: &Packet) -> [[[f32; 8]; 3]; 2] {
+        [
+            [lanes(p.o[0]), lanes(p.o[1]), lanes(p.o[2])],
+            [lanes(p.d[0]), lanes(p.d[1]), lanes(p.d[2])],
+        ]
+    }
+
+    /// Lane `l`'s ray of a packet's [`rows`].
+    #[inline(always)]
+    fn ray_at([o, d]: &[[[f32; 8]; 3]; 2], l: usize) -> Ray {
+        Ray {
+            o: glam::Vec3::new(o[0][l], o[1][l], o[2][l]),
+            d: glam::Vec3::new(d[0][l], d[1][l], d[2][l]),
+        }
+    }
+
     /// The least of a vector's lanes.
     #[inline]
     #[target_feature(enable = "avx")]
@@ -825,19 +844,15 @@ mod avx {
         node: u32,
         bits: i32,
     ) {
-        let o = [lanes(p.o[0]), lanes(p.o[1]), lanes(p.o[2])];
-        let d = [lanes(p.d[0]), lanes(p.d[1]), lanes(p.d[2])];
         let (mut t, mut b1, mut b2, mut prim) = (
             lanes(*t_limit),
             lanes(best.b1),
             lanes(best.b2),
             prims(best.prim),
         );
+        let rows = rows(p);
         for l in lanes_of(bits as u32) {
-            let ray = Ray {
-                o: glam::Vec3::new(o[0][l], o[1][l], o[2][l]),
-                d: glam::Vec3::new(d[0][l], d[1][l], d[2][l]),
-            };
+            let ray = ray_at(&rows, l);
             let held = (prim[l] != NO_PRIM).then_some(Candidate {
                 t: t[l],
                 prim: prim[l],
@@ -948,15 +963,9 @@ mod avx {
             }
         };
         let single = |hit: &mut i32, p: &mut Packet, t_limit: &mut __m256, node: u32, bits: i32| {
-            let t = lanes(*t_limit);
-            let o = [lanes(p.o[0]), lanes(p.o[1]), lanes(p.o[2])];
-            let d = [lanes(p.d[0]), lanes(p.d[1]), lanes(p.d[2])];
+            let (t, rows) = (lanes(*t_limit), rows(p));
             for l in lanes_of(bits as u32) {
-                let ray = Ray {
-                    o: glam::Vec3::new(o[0][l], o[1][l], o[2][l]),
-                    d: glam::Vec3::new(d[0][l], d[1][l], d[2][l]),
-                };
-                if occluded_below(scene, &ray, node, t[l]) {
+                if occluded_below(scene, &ray_at(&rows, l), node, t[l]) {
                     *hit |= 1 << l;
                     p.active &= !(1 << l);
                 }
