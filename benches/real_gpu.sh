@@ -62,13 +62,20 @@ step "bench 512x512, gpu"
 cat "$out/bench_512.txt"
 
 # Issue 46's first image, as a user runs it: the whole process, cold (the driver's shader cache
-# pointed at an empty folder: NVIDIA's and Mesa's) and then twice warm. Each run's log says the
-# adapter's time, the kernel's build, the first pass and the rate after it apart.
-step "first image: tncg15_room ${FIRST_IMAGE_SIZE:-800}x${FIRST_IMAGE_SIZE:-800}, ${GOAL_SPP:-50} spp, path, cold then warm"
+# pointed at an empty folder: NVIDIA's and Mesa's; hexray's pipeline cache empty), then with
+# hexray's pipeline cache alone (the driver's pointed at another empty folder), then twice warm.
+# Each run's log says the adapter's time, the kernel's build, the pipeline cache's bytes, the
+# first pass and the rate after it apart.
+step "first image: tncg15_room ${FIRST_IMAGE_SIZE:-800}x${FIRST_IMAGE_SIZE:-800}, ${GOAL_SPP:-50} spp, path, cold, pipeline cache alone, warm"
 cold_cache=$(mktemp -d)
-for run in cold warm1 warm2; do
+second_cache=$(mktemp -d)
+export HEXRAY_PIPELINE_CACHE
+HEXRAY_PIPELINE_CACHE=$(mktemp -d)
+for run in cold pipeline_cache warm1 warm2; do
     if [ "$run" = cold ]; then
         cache=(env __GL_SHADER_DISK_CACHE_PATH="$cold_cache" MESA_SHADER_CACHE_DIR="$cold_cache")
+    elif [ "$run" = pipeline_cache ]; then
+        cache=(env __GL_SHADER_DISK_CACHE_PATH="$second_cache" MESA_SHADER_CACHE_DIR="$second_cache")
     else
         cache=(env)
     fi
@@ -78,10 +85,11 @@ for run in cold warm1 warm2; do
         --spp "${GOAL_SPP:-50}" --out "$out/first_image_$run.exr" \
         > "$out/first_image_$run.txt" 2>&1
     echo "process milliseconds $((($(date +%s%N) - start) / 1000000))" >> "$out/first_image_$run.txt"
-    grep -E 'adapter and device|kernel built|^rendered|^first pass|process milliseconds' \
+    grep -E 'adapter and device|kernel built|pipeline cache|^rendered|^first pass|process milliseconds' \
         "$out/first_image_$run.txt" | sed "s/^/$run: /"
 done
-rm -rf "$cold_cache"
+rm -rf "$cold_cache" "$second_cache" "$HEXRAY_PIPELINE_CACHE"
+unset HEXRAY_PIPELINE_CACHE
 
 step "issue 7's goal: tncg15_room 800x800, 50 spp, path (after bench's 1-spp warm-up)"
 "$hexray" bench scenes/tncg15_room.json --backend gpu --width 800 --height 800 \

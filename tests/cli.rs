@@ -314,6 +314,75 @@ fn a_gpu_render_reports_its_start_up_and_first_pass_apart() {
     }
 }
 
+/// A small GPU render with `HEXRAY_PIPELINE_CACHE` set to `cache`: its stderr, after asserting
+/// that it succeeded.
+fn gpu_render_with_pipeline_cache(cache: &std::ffi::OsStr, out: &std::path::Path) -> String {
+    let o = hexray()
+        .args(["--backend", "gpu", "--method", "path", "--spp", "1"])
+        .args(["--width", "8", "--height", "8", "--out"])
+        .arg(out)
+        .env("HEXRAY_PIPELINE_CACHE", cache)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    err
+}
+
+/// A GPU render keeps its compiled pipelines in a file named by the adapter, and the next render
+/// reads it. A file that is not a cache (another driver's, a broken write) is set aside: the
+/// render starts an empty cache and writes a good one over it.
+#[test]
+fn a_gpu_render_keeps_its_pipelines_in_a_cache_file_and_survives_a_broken_one() {
+    if crate::common::gpu().is_none() {
+        return;
+    }
+    let dir = temp_dir!("pipeline_cache");
+    let cache = dir.join("cache");
+    let err = gpu_render_with_pipeline_cache(cache.as_os_str(), &dir.join("a.exr"));
+    if err.contains("hexray: pipeline cache: none") {
+        eprintln!("the adapter offers no pipeline cache: nothing more to check");
+        return;
+    }
+    let files: Vec<_> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    let good = std::fs::read(&files[0]).unwrap();
+    assert!(err.contains(": 0 bytes read"), "{err}");
+    let err = gpu_render_with_pipeline_cache(cache.as_os_str(), &dir.join("b.exr"));
+    assert!(
+        err.contains(&format!(": {} bytes read", good.len())),
+        "{err}"
+    );
+    std::fs::write(&files[0], b"not a pipeline cache").unwrap();
+    let err = gpu_render_with_pipeline_cache(cache.as_os_str(), &dir.join("c.exr"));
+    assert!(err.contains(": 20 bytes read"), "{err}");
+    assert_eq!(std::fs::read(&files[0]).unwrap().len(), good.len());
+}
+
+/// `HEXRAY_PIPELINE_CACHE=off` keeps no cache, and a cache that cannot be written costs a
+/// warning, not the render.
+#[test]
+fn a_pipeline_cache_can_be_turned_off_and_an_unwritable_one_is_only_a_warning() {
+    if crate::common::gpu().is_none() {
+        return;
+    }
+    let dir = temp_dir!("pipeline_cache_off");
+    let err = gpu_render_with_pipeline_cache("off".as_ref(), &dir.join("a.exr"));
+    assert!(err.contains("hexray: pipeline cache: none"), "{err}");
+    // A file where the cache's folder should be.
+    let blocked = dir.join("blocked");
+    std::fs::write(&blocked, b"").unwrap();
+    let err = gpu_render_with_pipeline_cache(blocked.as_os_str(), &dir.join("b.exr"));
+    assert!(dir.join("b.exr").exists());
+    assert!(
+        err.contains("hexray: pipeline cache: none") || err.contains("not written"),
+        "{err}"
+    );
+}
+
 /// `auto` does not pick a software adapter (lavapipe): it runs the kernel on the same cores as
 /// the CPU backend, slower. The line says which adapter it passed over and why.
 #[test]

@@ -59,6 +59,7 @@ fn a_lost_device_keeps_the_samples_taken_before() {
         Residency::Storage,
         hexray::transport::method::Method::Path,
         0.0,
+        None,
     )
     .unwrap();
     let mut backend = Fragile {

@@ -191,6 +191,7 @@ pub fn make_backend<'a>(
                 Residency::preferred(&g.info, &g.device.limits(), flat),
                 method,
                 shadow_threshold_for(method, flat, &camera),
+                None,
             )?;
             renderer.set_light_samples(light_samples);
             if method.progressive() {

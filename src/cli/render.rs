@@ -740,6 +740,8 @@ fn gpu_backend(
         })?;
     }
     let compile = std::time::Instant::now();
+    let cache = gpu::pipeline_cache::cache_dir()
+        .and_then(|dir| gpu::pipeline_cache::open(&g.device, &g.info, &dir));
     let mut renderer = gpu::GpuRenderer::new(
         &g.device,
         &g.queue,
@@ -751,15 +753,30 @@ fn gpu_backend(
         residency,
         method,
         hexray::cpu::shadow_probe::shadow_threshold_for(method, flat, &camera),
+        cache.as_ref().map(|c| &c.cache),
     )?;
     renderer.set_light_samples(args.light_samples);
     renderer.set_merge_radius(radius);
     renderer.set_radiosity(radiosity);
+    let built = compile.elapsed().as_secs_f64();
+    let cached = cache
+        .as_ref()
+        .map(|c| (c.loaded_bytes, c.save(), c.path.display()));
     if !args.quiet {
         eprintln!(
-            "hexray: kernel built in {:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)",
-            compile.elapsed().as_secs_f64()
+            "hexray: kernel built in {built:.2} s ({residency:?} residency, {checks:?}; a driver may JIT it at the first pass)"
         );
+        match cached {
+            Some((read, Ok(written), path)) => {
+                eprintln!("hexray: pipeline cache {path}: {read} bytes read, {written} written")
+            }
+            Some((_, Err(e), path)) => {
+                eprintln!("hexray: warning: pipeline cache {path} not written: {e}")
+            }
+            None => {
+                eprintln!("hexray: pipeline cache: none (the adapter offers none, or it is off)")
+            }
+        }
     }
     Ok(hexray::render::GpuBackend {
         renderer,

@@ -30,7 +30,7 @@
 
 use super::frame::{tally_words, CELL_WORDS, MAX_PASS_SPP};
 use super::limits::{check_image_fits, largest_binding, splat_band_rows};
-use super::pipeline::{buffer_entries, compute_pipeline, storage};
+use super::pipeline::{buffer_entries, compute_pipeline, storage, Kernel};
 use crate::accel::hash_grid::GridParams;
 use crate::transport::merging::MergeRadius;
 use crate::transport::method::Method;
@@ -171,9 +171,9 @@ impl Pool {
 }
 
 impl Bidirectional {
-    pub fn new(
+    pub(in crate::gpu) fn new(
         device: &wgpu::Device,
-        module: &wgpu::ShaderModule,
+        kernel: Kernel<'_>,
         scene_layout: &wgpu::BindGroupLayout,
         method: Method,
         scene: &crate::layout::FlatScene,
@@ -245,7 +245,7 @@ impl Bidirectional {
         });
         let pool = Pool::new(device, &layout, capacity, &tallies, &camera_radiance);
         let layouts = [scene_layout, &layout];
-        let pipeline = |entry| compute_pipeline(device, module, &layouts, entry);
+        let pipeline = |entry| compute_pipeline(device, kernel, &layouts, entry);
         let merging = method.merges().then(|| Merging {
             setup: pipeline("grid_setup"),
             count: pipeline("grid_count"),

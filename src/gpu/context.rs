@@ -123,8 +123,11 @@ pub fn acquire(wanted: Option<&str>) -> Result<Gpu, GpuError> {
         max_storage_buffers_per_shader_stage: have.max_storage_buffers_per_shader_stage,
         ..wgpu::Limits::default()
     };
+    // Compiled pipelines kept across runs, where the adapter offers it (`pipeline_cache`).
+    let features = adapter.features() & wgpu::Features::PIPELINE_CACHE;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("hexray"),
+        required_features: features,
         required_limits: limits,
         ..Default::default()
     }))

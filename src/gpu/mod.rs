@@ -6,6 +6,7 @@ pub mod context;
 pub mod frame;
 pub mod limits;
 pub mod pipeline;
+pub mod pipeline_cache;
 pub mod radiosity;
 pub mod renderer;
 pub mod shader;

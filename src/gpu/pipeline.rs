@@ -54,10 +54,18 @@ pub(super) fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Bu
     })
 }
 
+/// The compiled kernel, and the pipeline cache its pipelines are built through, if any
+/// (`pipeline_cache`).
+#[derive(Clone, Copy)]
+pub(super) struct Kernel<'a> {
+    pub module: &'a wgpu::ShaderModule,
+    pub cache: Option<&'a wgpu::PipelineCache>,
+}
+
 /// A compute pipeline for entry point `entry` of the kernel, over bind groups of `layouts`.
 pub(super) fn compute_pipeline(
     device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
+    kernel: Kernel<'_>,
     layouts: &[&wgpu::BindGroupLayout],
     entry: &str,
 ) -> wgpu::ComputePipeline {
@@ -70,10 +78,10 @@ pub(super) fn compute_pipeline(
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
         layout: Some(&pipeline_layout),
-        module,
+        module: kernel.module,
         entry_point: Some(entry),
         compilation_options: Default::default(),
-        cache: None,
+        cache: kernel.cache,
     })
 }
 

@@ -10,7 +10,7 @@
 //! relative change below `JACOBI_TOLERANCE`), then the indirect light per patch.
 
 use super::limits::largest_binding;
-use super::pipeline::compute_pipeline;
+use super::pipeline::{compute_pipeline, Kernel};
 use crate::layout::FlatScene;
 use crate::transport::faults::Faults;
 use crate::transport::patches::{
@@ -144,7 +144,7 @@ pub(in crate::gpu) fn radiosity_layout(device: &wgpu::Device) -> wgpu::BindGroup
 impl Radiosity {
     pub(in crate::gpu) fn new(
         device: &wgpu::Device,
-        module: &wgpu::ShaderModule,
+        kernel: Kernel<'_>,
         scene_layout: &wgpu::BindGroupLayout,
         layout: wgpu::BindGroupLayout,
         scene: &FlatScene,
@@ -163,7 +163,7 @@ impl Radiosity {
         let pipeline = |entry| {
             compute_pipeline(
                 device,
-                module,
+                kernel,
                 &[scene_layout, &empty_layout, &layout],
                 entry,
             )

@@ -406,6 +406,7 @@ impl<'a> Render<'a> {
             Residency::preferred(&gpu.info, &gpu.device.limits(), &flat),
             self.method,
             shadow_threshold_for(self.method, &flat, &camera),
+            None,
         )
         .unwrap();
         if let Some(radius) = self.radius {

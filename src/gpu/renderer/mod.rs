@@ -12,7 +12,9 @@ use super::frame::{
 use super::limits::{
     array_lengths, check_scene_fits, largest_binding, PIXEL_RUN_BYTES, PIXEL_SUMS_BYTES,
 };
-use super::pipeline::{bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload};
+use super::pipeline::{
+    bind_group_layout, buffer_entries, compute_pipeline, packed_prims, upload, Kernel,
+};
 use super::radiosity::{radiosity_layout, Radiosity};
 use super::shader::Residency;
 use crate::film::Film;
@@ -192,6 +194,7 @@ impl GpuRenderer {
         residency: Residency,
         method: Method,
         shadow_threshold: f32,
+        pipeline_cache: Option<&wgpu::PipelineCache>,
     ) -> Result<GpuRenderer> {
         // A scene array beyond the binding limit would be a wgpu validation panic: say so first.
         check_scene_fits(&device.limits(), residency, scene).map_err(anyhow::Error::msg)?;
@@ -201,12 +204,16 @@ impl GpuRenderer {
         // The kernel and its pipelines: path tracing's one, or the light-subpath methods' passes.
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = compile_kernel(device, scene, checks, residency);
+        let kernel = Kernel {
+            module: &module,
+            cache: pipeline_cache,
+        };
         let layout = bind_group_layout(device, residency);
         let mut radiosity = None;
         let (pipeline, bidirectional) = if method.splats() {
             let b = Bidirectional::new(
                 device,
-                &module,
+                kernel,
                 &layout,
                 method,
                 scene,
@@ -218,7 +225,7 @@ impl GpuRenderer {
             // The image pass reads the solution through bind group 2, as the solve kernels do.
             let r = Radiosity::new(
                 device,
-                &module,
+                kernel,
                 &layout,
                 radiosity_layout(device),
                 scene,
@@ -227,7 +234,7 @@ impl GpuRenderer {
             );
             let pipeline = compute_pipeline(
                 device,
-                &module,
+                kernel,
                 &[&layout, &r.empty_layout, &r.layout],
                 "radiosity_pass",
             );
@@ -239,7 +246,7 @@ impl GpuRenderer {
                 _ => "render_pass",
             };
             (
-                Some(compute_pipeline(device, &module, &[&layout], entry)),
+                Some(compute_pipeline(device, kernel, &[&layout], entry)),
                 None,
             )
         };
