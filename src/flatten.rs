@@ -6,7 +6,7 @@
 
 use crate::accel::{bvh, wide_bvh};
 use crate::layout::{
-    sphere_area, triangle_area, BvhNode, Emitter, FlatScene, Material, Sphere, Triangle,
+    sphere_area, triangle_area, BvhNode, Emitter, FlatScene, Material, Sphere, Triangle, WideNode,
     KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, PRIM_SPHERE_BIT,
 };
 use crate::scene::{MaterialDesc, Scene};
@@ -96,7 +96,7 @@ impl FlatScene {
         let mut spheres = spheres;
         let emitters = build_emitter_table(&mut triangles, &mut spheres, &materials);
         let started = std::time::Instant::now();
-        let (nodes, prims) = bvh::build(&triangles, &spheres);
+        let (nodes, prims, wide) = bvh::build_trees(&triangles, &spheres);
         let bvh_seconds = started.elapsed().as_secs_f64();
         let planar_mirrors = planar_mirror::find(&mut triangles, &materials);
         FlatScene {
@@ -104,22 +104,35 @@ impl FlatScene {
             planar_mirrors,
             materials,
             emitters,
-            ..FlatScene::from_tree(triangles, spheres, nodes, prims)
+            ..FlatScene::from_trees(triangles, spheres, nodes, prims, wide)
         }
     }
 
     /// A scene of these primitives and this BVH (`bvh::build`'s), with what the CPU derives from
-    /// them (the triangle packs, the wide tree) and no materials or emitters: for tests and
-    /// tools that build a tree themselves.
+    /// them (the triangle packs, and a wide tree collapsed from the four-wide one,
+    /// `wide_bvh::collapse`) and no materials or emitters: for tests and tools that build a tree
+    /// themselves.
     pub fn from_tree(
         triangles: Vec<Triangle>,
         spheres: Vec<Sphere>,
         nodes: Vec<BvhNode>,
         prims: Vec<u32>,
     ) -> FlatScene {
+        let wide = wide_bvh::collapse(&nodes);
+        FlatScene::from_trees(triangles, spheres, nodes, prims, wide)
+    }
+
+    /// [`FlatScene::from_tree`] with the CPU's wide tree given (`bvh::build_trees`').
+    pub fn from_trees(
+        triangles: Vec<Triangle>,
+        spheres: Vec<Sphere>,
+        nodes: Vec<BvhNode>,
+        prims: Vec<u32>,
+        wide: Vec<WideNode>,
+    ) -> FlatScene {
         FlatScene {
             packs: bvh::triangle_packs(&triangles, &prims),
-            wide: wide_bvh::collapse(&nodes),
+            wide,
             triangles,
             spheres,
             nodes,

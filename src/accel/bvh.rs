@@ -4,9 +4,10 @@
 //! `shaders/bvh.wgsl` repeats; the path tracer traces its rays eight at a time instead where that
 //! pays ([`crate::accel::packet`], the same hits).
 
-use crate::accel::wide_bvh::intersect_wide;
+use crate::accel::wide_bvh::{intersect_wide, WIDTH};
 use crate::layout::{
-    BvhNode, FlatScene, Sphere, Triangle, TrianglePack, EMPTY_SLOT, PRIM_PADDING, PRIM_SPHERE_BIT,
+    BvhNode, FlatScene, Sphere, Triangle, TrianglePack, WideNode, EMPTY_SLOT, PRIM_PADDING,
+    PRIM_SPHERE_BIT,
 };
 use crate::math::geometry::{
     intersect_sphere, intersect_triangles4, safe_inverse, sphere_point, triangle_hit_point,
@@ -101,6 +102,33 @@ impl Built {
 /// multiple of four, with [`PRIM_PADDING`] entries in the gaps and at the end (so `prims` is
 /// not one entry per primitive).
 pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u32>) {
+    let (nodes, prims, _) = build_trees(triangles, spheres);
+    (nodes, prims)
+}
+
+/// [`build`], and the CPU's eight-wide tree collapsed from the same binary tree, with the same
+/// leaves ([`collapse_wide`]).
+pub fn build_trees(
+    triangles: &[Triangle],
+    spheres: &[Sphere],
+) -> (Vec<BvhNode>, Vec<u32>, Vec<WideNode>) {
+    let Some((root, info)) = binary_tree(triangles, spheres) else {
+        // Nothing to hit: a root whose slots are empty.
+        let nodes = vec![BvhNode {
+            count: [EMPTY_SLOT; 4],
+            ..Default::default()
+        }];
+        let wide = crate::accel::wide_bvh::collapse(&nodes);
+        return (nodes, Vec::new(), wide);
+    };
+    let mut starts = vec![0u32; info.len()];
+    let four = Collapse::of(&root, 4);
+    let (nodes, prims) = flatten_root(&root, &four, &info, &mut starts);
+    (nodes, prims, collapse_wide(&root, &starts))
+}
+
+/// The binary SAH tree over the primitives, and their build-order records (None for none).
+fn binary_tree(triangles: &[Triangle], spheres: &[Sphere]) -> Option<(Built, Vec<PrimInfo>)> {
     let mut info: Vec<PrimInfo> = Vec::with_capacity(triangles.len() + spheres.len());
     for (i, t) in triangles.iter().enumerate() {
         let mut b = Aabb::EMPTY;
@@ -127,28 +155,180 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
             id: i as u32 | PRIM_SPHERE_BIT,
         });
     }
-    let n = info.len();
-    let mut nodes = Vec::with_capacity(n);
-    if n == 0 {
-        // Nothing to hit: a root whose four slots are empty.
-        nodes.push(BvhNode {
-            count: [EMPTY_SLOT; 4],
-            ..Default::default()
-        });
-        return (nodes, Vec::new());
+    if info.is_empty() {
+        return None;
     }
-    let packed = n > PACKED_LEAVES_ABOVE;
-    flatten_root(&build_node(&mut info, 0, 0, packed), &info, nodes)
+    let packed = info.len() > PACKED_LEAVES_ABOVE;
+    let root = build_node(&mut info, 0, 0, packed);
+    Some((root, info))
+}
+
+/// The CPU's eight-wide tree of the binary tree `root`, root first. The leaves are fixed (the
+/// four-wide tree's: `starts` gives each leaf's first entry in `prims`, by its first primitive's
+/// index in the build order), so the SAH cost of a collapse differs only in its nodes' boxes:
+/// the choice of which binary nodes become eight-wide nodes minimises the sum of their surface
+/// areas, each with at most eight slots (the dynamic programme of Ylitie, Karras and Laine
+/// 2017, "Efficient incoherent ray traversal on GPUs through compressed wide BVHs", with its
+/// leaves given). A greedy collapse (open the widest child until eight) leaves half-empty nodes
+/// at the bottom of the tree.
+fn collapse_wide(root: &Built, starts: &[u32]) -> Vec<WideNode> {
+    let costs = Collapse::of(root, WIDTH);
+    let mut wide = Vec::new();
+    append_wide(root, &costs, starts, &mut wide);
+    wide
+}
+
+/// A binary node's collapse costs: `cost[i]` the least sum of node areas in its subtree when it
+/// takes at most i slots of its parent (i = 1: it is a leaf or a node of its own), `choice[i]`
+/// how (0: as with i − 1 slots; k: k slots to the left child, i − k to the right), and `own`
+/// the left child's share of its own node's eight slots.
+struct Collapse {
+    cost: [f32; WIDTH + 1],
+    choice: [u8; WIDTH + 1],
+    own: u8,
+    children: Option<Box<[Collapse; 2]>>,
+}
+
+impl Collapse {
+    /// The costs of a collapse of `built` into nodes of at most `width` (≤ [`WIDTH`]) slots.
+    fn of(built: &Built, width: usize) -> Collapse {
+        let Built::Interior { bounds, children } = built else {
+            return Collapse {
+                cost: [0.0; WIDTH + 1],
+                choice: [0; WIDTH + 1],
+                own: 0,
+                children: None,
+            };
+        };
+        let (l, r) = (
+            Collapse::of(&children[0], width),
+            Collapse::of(&children[1], width),
+        );
+        // split(j): the least cost of the two subtrees in j slots, and the left one's share.
+        let split = |j: usize| {
+            (1..j)
+                .map(|k| (l.cost[k] + r.cost[j - k], k as u8))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .expect("j >= 2")
+        };
+        let (own_cost, own) = split(width);
+        let mut cost = [f32::INFINITY; WIDTH + 1];
+        let mut choice = [0; WIDTH + 1];
+        cost[1] = bounds.area() + own_cost;
+        for i in 2..=width {
+            let (c, k) = split(i);
+            (cost[i], choice[i]) = if c < cost[i - 1] {
+                (c, k)
+            } else {
+                (cost[i - 1], 0)
+            };
+        }
+        Collapse {
+            cost,
+            choice,
+            own,
+            children: Some(Box::new([l, r])),
+        }
+    }
+
+    /// The slots that binary node `built` (with costs `self`) takes in `slots` of its parent,
+    /// each with its costs.
+    fn expand<'a>(&'a self, built: &'a Built, slots: usize, out: &mut Vec<(&'a Built, &'a Self)>) {
+        let (Built::Interior { children, .. }, Some(c)) = (built, &self.children) else {
+            out.push((built, self));
+            return;
+        };
+        if slots <= 1 {
+            out.push((built, self));
+        } else if self.choice[slots] == 0 {
+            self.expand(built, slots - 1, out);
+        } else {
+            let k = self.choice[slots] as usize;
+            c[0].expand(&children[0], k, out);
+            c[1].expand(&children[1], slots - k, out);
+        }
+    }
+}
+
+impl Collapse {
+    /// The slots of the node that binary node `built` (with costs `self`, for nodes of `width`
+    /// slots) becomes: its children's shares of the `width`, or itself where it is a leaf (a
+    /// scene's root of up to `MAX_LEAF` primitives), each with its costs.
+    fn slots<'a>(&'a self, built: &'a Built, width: usize) -> Vec<(&'a Built, &'a Self)> {
+        let mut kids = Vec::with_capacity(width);
+        match (built, &self.children) {
+            (Built::Interior { children, .. }, Some(c)) => {
+                let k = self.own as usize;
+                c[0].expand(&children[0], k, &mut kids);
+                c[1].expand(&children[1], width - k, &mut kids);
+            }
+            _ => kids.push((built, self)),
+        }
+        kids
+    }
+}
+
+fn append_wide(built: &Built, costs: &Collapse, starts: &[u32], wide: &mut Vec<WideNode>) -> u32 {
+    let kids = costs.slots(built, WIDTH);
+    let at = wide.len();
+    wide.push(WideNode::default());
+    let mut node = WideNode::default();
+    for (c, (kid, kid_costs)) in kids.iter().enumerate() {
+        let (h, l) = (c / 4, c % 4);
+        let b = kid.bounds();
+        (node.min_x[h][l], node.min_y[h][l], node.min_z[h][l]) = (b.min.x, b.min.y, b.min.z);
+        (node.max_x[h][l], node.max_y[h][l], node.max_z[h][l]) = (b.max.x, b.max.y, b.max.z);
+        match kid {
+            Built::Leaf { offset, count, .. } => {
+                node.child[c] = starts[*offset as usize];
+                node.count[c] = *count;
+            }
+            Built::Interior { .. } => {
+                node.child[c] = append_wide(kid, kid_costs, starts, wide);
+                node.count[c] = 0;
+            }
+        }
+    }
+    wide[at] = node;
+    at as u32
+}
+
+/// The children of a `width`-wide node made from binary node `built` by the greedy collapse
+/// (Wald et al. 2008, "Getting rid of packets"): its two children, and while fewer than
+/// `width`, the interior one of largest surface area replaced by its two (the tests' yardstick
+/// for [`Collapse`]).
+#[cfg(test)]
+fn open_widest(built: &Built, width: usize) -> Vec<&Built> {
+    let mut kids: Vec<&Built> = match built {
+        Built::Interior { children, .. } => children.iter().collect(),
+        Built::Leaf { .. } => vec![built],
+    };
+    while kids.len() < width {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, Built::Interior { .. }))
+            .max_by(|(_, a), (_, b)| a.bounds().area().total_cmp(&b.bounds().area()))
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let Built::Interior { children, .. } = kids.remove(i) else {
+            unreachable!()
+        };
+        kids.extend(children.iter());
+    }
+    kids
 }
 
 /// Flattens the tree `root` into `nodes` and the padded `prims` that [`build`] returns.
 fn flatten_root(
     root: &Built,
+    costs: &Collapse,
     info: &[PrimInfo],
-    mut nodes: Vec<BvhNode>,
+    starts: &mut [u32],
 ) -> (Vec<BvhNode>, Vec<u32>) {
+    let mut nodes = Vec::with_capacity(info.len() / 4 + 1);
     let mut prims = Vec::with_capacity(info.len());
-    flatten(root, info, &mut nodes, &mut prims);
+    flatten(root, costs, info, &mut nodes, &mut prims, starts);
     prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
     (nodes, prims)
 }
@@ -177,44 +357,30 @@ pub fn triangle_packs(triangles: &[Triangle], prims: &[u32]) -> Vec<TrianglePack
 }
 
 /// Appends the node `built` and its interior descendants in depth-first order as four-wide nodes;
-/// returns its index. The binary node's two children become up to four by repeatedly opening the
-/// interior child of largest surface area (the collapse of Wald et al., "Getting Rid of Packets",
-/// 2008), which keeps the SAH tree's structure and halves the levels. A root that is a leaf (a
-/// scene of up to `MAX_LEAF` primitives the SAH does not split) becomes a node of one slot.
+/// returns its index. Which binary nodes become four-wide nodes is the collapse of least total
+/// node area (`costs`, [`Collapse`]), which keeps the SAH tree's structure and about halves the
+/// levels. A root that is a leaf (a scene of up to `MAX_LEAF` primitives the SAH does not split)
+/// becomes a node of one slot.
 ///
 /// Each leaf's primitives are appended to `prims` starting at a multiple of four (the gap filled
 /// with [`PRIM_PADDING`], which no leaf covers), triangles before spheres: the CPU tests them
 /// four at a time from [`triangle_packs`], and both backends visit them in this order.
 fn flatten(
     built: &Built,
+    costs: &Collapse,
     info: &[PrimInfo],
     nodes: &mut Vec<BvhNode>,
     prims: &mut Vec<u32>,
+    starts: &mut [u32],
 ) -> u32 {
-    let mut kids: Vec<&Built> = match built {
-        Built::Interior { children, .. } => children.iter().collect(),
-        Built::Leaf { .. } => vec![built],
-    };
-    while kids.len() < 4 {
-        let widest = kids
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| matches!(k, Built::Interior { .. }))
-            .max_by(|(_, a), (_, b)| a.bounds().area().total_cmp(&b.bounds().area()))
-            .map(|(i, _)| i);
-        let Some(i) = widest else { break };
-        let Built::Interior { children, .. } = kids.remove(i) else {
-            unreachable!()
-        };
-        kids.extend(children.iter());
-    }
+    let kids = costs.slots(built, 4);
     let index = nodes.len();
     nodes.push(BvhNode::default());
     let mut node = BvhNode {
         count: [EMPTY_SLOT; 4],
         ..Default::default()
     };
-    for (c, kid) in kids.iter().enumerate() {
+    for (c, (kid, kid_costs)) in kids.iter().enumerate() {
         let b = kid.bounds();
         (node.min_x[c], node.min_y[c], node.min_z[c]) = (b.min.x, b.min.y, b.min.z);
         (node.max_x[c], node.max_y[c], node.max_z[c]) = (b.max.x, b.max.y, b.max.z);
@@ -223,6 +389,7 @@ fn flatten(
                 debug_assert!(*count > 0, "an empty leaf would read as an interior node");
                 prims.resize(prims.len().next_multiple_of(4), PRIM_PADDING);
                 node.child[c] = prims.len() as u32;
+                starts[*offset as usize] = prims.len() as u32;
                 node.count[c] = *count;
                 let leaf = &info[*offset as usize..(*offset + *count) as usize];
                 let is_sphere = |p: &&PrimInfo| p.id & PRIM_SPHERE_BIT != 0;
@@ -230,7 +397,7 @@ fn flatten(
                 prims.extend(leaf.iter().filter(is_sphere).map(|p| p.id));
             }
             Built::Interior { .. } => {
-                node.child[c] = flatten(kid, info, nodes, prims);
+                node.child[c] = flatten(kid, kid_costs, info, nodes, prims, starts);
                 node.count[c] = 0;
             }
         }
@@ -816,8 +983,78 @@ mod tests {
     }
 
     fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
-        let (nodes, prims) = build(&tris, &spheres);
-        FlatScene::from_tree(tris, spheres, nodes, prims)
+        let (nodes, prims, wide) = build_trees(&tris, &spheres);
+        FlatScene::from_trees(tris, spheres, nodes, prims, wide)
+    }
+
+    /// The total surface area of the nodes of a collapse of `built` that opens nodes greedily
+    /// ([`open_widest`]) into nodes of `width` slots.
+    fn greedy_area(built: &Built, width: usize) -> f32 {
+        let Built::Interior { bounds, .. } = built else {
+            return 0.0;
+        };
+        bounds.area()
+            + open_widest(built, width)
+                .into_iter()
+                .map(|k| greedy_area(k, width))
+                .sum::<f32>()
+    }
+
+    /// The collapse of the binary tree into four- and eight-wide nodes has the least total node
+    /// area that any choice of nodes reaches with the leaves given: at most the greedy
+    /// collapse's, and here less. The wide tree built has that area.
+    #[test]
+    fn the_wide_trees_are_the_collapses_of_least_node_area() {
+        let tris = triangle_soup(3000, 7, 10.0, 0.0);
+        let (root, _) = binary_tree(&tris, &[]).unwrap();
+        for width in [4, 8] {
+            let least = Collapse::of(&root, width).cost[1];
+            let greedy = greedy_area(&root, width);
+            eprintln!("width {width}: least {least}, greedy {greedy}");
+            assert!(
+                least < 0.99 * greedy,
+                "width {width}: {least} against {greedy}"
+            );
+        }
+        let (nodes, _, wide) = build_trees(&tris, &[]);
+        let union = |boxes: Vec<(Vec3, Vec3)>| {
+            let mut b = Aabb::EMPTY;
+            for (lo, hi) in boxes {
+                b.grow(&Aabb { min: lo, max: hi });
+            }
+            b.area()
+        };
+        let wide_area: f32 = wide
+            .iter()
+            .map(|n| {
+                union(
+                    (0..WIDTH)
+                        .filter(|&c| n.count[c] != EMPTY_SLOT)
+                        .map(|c| n.child_bounds(c))
+                        .collect(),
+                )
+            })
+            .sum();
+        let four_area: f32 = nodes
+            .iter()
+            .map(|n| {
+                union(
+                    (0..4)
+                        .filter(|&c| n.count[c] != EMPTY_SLOT)
+                        .map(|c| n.child_bounds(c))
+                        .collect(),
+                )
+            })
+            .sum();
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b;
+        assert!(
+            close(wide_area, Collapse::of(&root, 8).cost[1]),
+            "{wide_area}"
+        );
+        assert!(
+            close(four_area, Collapse::of(&root, 4).cost[1]),
+            "{four_area}"
+        );
     }
 
     /// The scene's nearest hit along `ray` and whether it blocks the segment (0, 1) are what
@@ -912,7 +1149,7 @@ mod tests {
             offset: 0,
             count: 14,
         };
-        let (nodes, prims) = flatten_root(&leaf, &info, Vec::new());
+        let (nodes, prims) = flatten_root(&leaf, &Collapse::of(&leaf, 4), &info, &mut [0; 14]);
         assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
         assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
         let scene = FlatScene::from_tree(tris.clone(), spheres.clone(), nodes, prims);

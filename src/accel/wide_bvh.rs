@@ -1,5 +1,7 @@
-//! The CPU's eight-wide BVH: the shared four-wide tree (`FlatScene::nodes`, which the shader
-//! traverses) collapsed once more, so that one node visit tests up to eight child boxes.
+//! The CPU's eight-wide BVH: one node visit tests up to eight child boxes. A scene's own tree
+//! is collapsed from the binary SAH tree (`bvh::build_trees`, the collapse of least node area);
+//! [`collapse`] makes one from a four-wide tree alone (`FlatScene::from_tree`, for tests and
+//! tools that build a tree themselves).
 //!
 //! The traversal's cost on the CPU is the latency of each node's test-decide-load chain, not the
 //! instruction count (docs/journal/2026-11-23_cpu_traversal.md): a node of eight children is two
@@ -47,7 +49,8 @@ fn slots(node: &BvhNode) -> ArrayVec<Slot, 4> {
         .collect()
 }
 
-/// The wide tree of a four-wide one, root first. Each wide node starts from a four-wide node's
+/// The wide tree of a four-wide one, root first (trees that tests and tools build; a scene's own
+/// comes from `bvh::build_trees`). Each wide node starts from a four-wide node's
 /// children and opens the interior child of largest surface area while its children fit in the
 /// eight slots (the collapse that made the four-wide tree of the binary one, `bvh::flatten`); an
 /// opened child's children take its place, so leaves keep their relative order.

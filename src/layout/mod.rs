@@ -206,8 +206,8 @@ pub struct FlatScene {
     /// The CPU's alone: the leaves' triangles four to a SIMD pack (`bvh::triangle_packs`),
     /// derived from `triangles` and `prims`; the shader reads those instead.
     pub packs: Vec<TrianglePack>,
-    /// The CPU's alone: the tree collapsed to eight-wide nodes (`wide_bvh::collapse`), which
-    /// the CPU traverses; the shader traverses `nodes`.
+    /// The CPU's alone: the tree collapsed to eight-wide nodes (`bvh::build_trees`), which the
+    /// CPU traverses; the shader traverses `nodes`.
     pub wide: Vec<WideNode>,
     /// Seconds the BVH build took (`bvh::build`, not the SIMD packs), for logs.
     pub bvh_seconds: f64,
