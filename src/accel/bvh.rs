@@ -124,6 +124,8 @@ pub fn build_trees(
     let mut starts = vec![0u32; info.len()];
     let four = Collapse::of(&root, 4);
     let (nodes, prims) = flatten_root(&root, &four, &info, &mut starts);
+    // One programme's tables at a time: they take about as much memory as the binary tree.
+    drop(four);
     (nodes, prims, collapse_wide(&root, &starts))
 }
 
@@ -178,6 +180,10 @@ fn collapse_wide(root: &Built, starts: &[u32]) -> Vec<WideNode> {
     wide
 }
 
+/// Down to this depth of the binary tree, [`Collapse`] computes the two subtrees' tables in
+/// parallel.
+const PARALLEL_COLLAPSE_DEPTH: u32 = 6;
+
 /// A binary node's collapse costs: `cost[i]` the least sum of node areas in its subtree when it
 /// takes at most i slots of its parent (i = 1: it is a leaf or a node of its own), `choice[i]`
 /// how (0: as with i − 1 slots; k: k slots to the left child, i − k to the right), and `own`
@@ -192,6 +198,12 @@ struct Collapse {
 impl Collapse {
     /// The costs of a collapse of `built` into nodes of at most `width` (≤ [`WIDTH`]) slots.
     fn of(built: &Built, width: usize) -> Collapse {
+        Collapse::below(built, width, 0)
+    }
+
+    /// [`Collapse::of`] for a node at `depth`: the two subtrees in parallel near the root
+    /// (the tables do not depend on the order).
+    fn below(built: &Built, width: usize, depth: u32) -> Collapse {
         let Built::Interior { bounds, children } = built else {
             return Collapse {
                 cost: [0.0; WIDTH + 1],
@@ -200,10 +212,17 @@ impl Collapse {
                 children: None,
             };
         };
-        let (l, r) = (
-            Collapse::of(&children[0], width),
-            Collapse::of(&children[1], width),
-        );
+        let (l, r) = if depth < PARALLEL_COLLAPSE_DEPTH {
+            rayon::join(
+                || Collapse::below(&children[0], width, depth + 1),
+                || Collapse::below(&children[1], width, depth + 1),
+            )
+        } else {
+            (
+                Collapse::below(&children[0], width, depth + 1),
+                Collapse::below(&children[1], width, depth + 1),
+            )
+        };
         // split(j): the least cost of the two subtrees in j slots, and the left one's share.
         let split = |j: usize| {
             (1..j)
