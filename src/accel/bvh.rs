@@ -31,8 +31,14 @@ pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 /// The CPU's traversal stack over the wide tree: at most seven children pushed per level, and
 /// the wide tree is no deeper than the four-wide one.
 pub(crate) const WIDE_STACK_SIZE: usize = (crate::accel::wide_bvh::WIDTH - 1) * MAX_DEPTH;
-/// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2).
+/// Cost of visiting a node relative to a leaf's test of one pack of four primitives (pbrt-v4
+/// uses 1/2 of one primitive's): trees above [`PACKED_LEAVES_ABOVE`] primitives.
 const TRAVERSAL_COST: f32 = 0.5;
+/// Cost of visiting a node relative to one primitive's test, in trees whose leaves cost their
+/// primitives. 1 rather than 1/2 gives bunny_room larger leaves (853 four-wide nodes instead of
+/// 1 383) and 1.04x the camera paths/s on the CPU, the rooms level; 2 cost tncg15_room 4 %
+/// (docs/journal/2026-11-29_sah_collapse.md).
+const TRAVERSAL_COST_PER_PRIMITIVE: f32 = 1.0;
 /// Scenes of more primitives than this cost a leaf by its packs of four primitives, not by its
 /// primitives. In a large tree the packets hand their rays to single-ray traversal below the top
 /// levels ([`crate::accel::packet::SINGLE_RAY_LANES`]), which tests a leaf's four triangles at
@@ -187,7 +193,7 @@ const PARALLEL_COLLAPSE_DEPTH: u32 = 6;
 /// A binary node's collapse costs: `cost[i]` the least sum of node areas in its subtree when it
 /// takes at most i slots of its parent (i = 1: it is a leaf or a node of its own), `choice[i]`
 /// how (0: as with i − 1 slots; k: k slots to the left child, i − k to the right), and `own`
-/// the left child's share of its own node's eight slots.
+/// the left child's share of the slots of the node it becomes itself.
 struct Collapse {
     cost: [f32; WIDTH + 1],
     choice: [u8; WIDTH + 1],
@@ -267,9 +273,7 @@ impl Collapse {
             c[1].expand(&children[1], slots - k, out);
         }
     }
-}
 
-impl Collapse {
     /// The slots of the node that binary node `built` (with costs `self`, for nodes of `width`
     /// slots) becomes: its children's shares of the `width`, or itself where it is a leaf (a
     /// scene's root of up to `MAX_LEAF` primitives), each with its costs.
@@ -492,7 +496,12 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -
             if n == 0 || n == count {
                 continue;
             }
-            let cost = TRAVERSAL_COST + (leaf_cost(n) * acc.area() + right_cost[b]) / bounds.area();
+            let traversal = if packed {
+                TRAVERSAL_COST
+            } else {
+                TRAVERSAL_COST_PER_PRIMITIVE
+            };
+            let cost = traversal + (leaf_cost(n) * acc.area() + right_cost[b]) / bounds.area();
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
