@@ -4,7 +4,7 @@
 //! primitives with the CPU's forms of it (triangle packs, the eight-wide tree), and the planar
 //! mirrors.
 
-use crate::accel::{bvh, wide_bvh};
+use crate::accel::bvh;
 use crate::layout::{
     sphere_area, triangle_area, BvhNode, Emitter, FlatScene, Material, Sphere, Triangle, WideNode,
     KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, PRIM_SPHERE_BIT,
@@ -104,26 +104,14 @@ impl FlatScene {
             planar_mirrors,
             materials,
             emitters,
-            ..FlatScene::from_trees(triangles, spheres, nodes, prims, wide)
+            ..FlatScene::from_tree(triangles, spheres, nodes, prims, wide)
         }
     }
 
-    /// A scene of these primitives and this BVH (`bvh::build`'s), with what the CPU derives from
-    /// them (the triangle packs, and a wide tree collapsed from the four-wide one,
-    /// `wide_bvh::collapse`) and no materials or emitters: for tests and tools that build a tree
-    /// themselves.
+    /// A scene of these primitives and these trees (`bvh::build_trees`'), with the triangle
+    /// packs the CPU derives from them and no materials or emitters: for tests and tools that
+    /// build a tree themselves.
     pub fn from_tree(
-        triangles: Vec<Triangle>,
-        spheres: Vec<Sphere>,
-        nodes: Vec<BvhNode>,
-        prims: Vec<u32>,
-    ) -> FlatScene {
-        let wide = wide_bvh::collapse(&nodes);
-        FlatScene::from_trees(triangles, spheres, nodes, prims, wide)
-    }
-
-    /// [`FlatScene::from_tree`] with the CPU's wide tree given (`bvh::build_trees`').
-    pub fn from_trees(
         triangles: Vec<Triangle>,
         spheres: Vec<Sphere>,
         nodes: Vec<BvhNode>,

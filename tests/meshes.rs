@@ -711,8 +711,8 @@ fn cut_bunny(n: u32) -> Vec<Triangle> {
 fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
     let tris = cut_bunny(6);
     assert!(tris.len() >= 100_000, "{} triangles", tris.len());
-    let (nodes, prims) = bvh::build(&tris, &[]);
-    let scene = FlatScene::from_tree(tris.clone(), Vec::new(), nodes, prims);
+    let (nodes, prims, wide) = bvh::build_trees(&tris, &[]);
+    let scene = FlatScene::from_tree(tris.clone(), Vec::new(), nodes, prims, wide);
     // A fixed generator of uniform numbers in [0, 1).
     let rnd = |i: u32, k: u32| {
         let mut x = (i as u64) << 32 | k as u64;

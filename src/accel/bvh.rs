@@ -124,7 +124,7 @@ pub fn build_trees(
             count: [EMPTY_SLOT; 4],
             ..Default::default()
         }];
-        let wide = crate::accel::wide_bvh::collapse(&nodes);
+        let wide = crate::accel::wide_bvh::one_for_one(&nodes);
         return (nodes, Vec::new(), wide);
     };
     let mut starts = vec![0u32; info.len()];
@@ -1012,7 +1012,7 @@ mod tests {
 
     fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
         let (nodes, prims, wide) = build_trees(&tris, &spheres);
-        FlatScene::from_trees(tris, spheres, nodes, prims, wide)
+        FlatScene::from_tree(tris, spheres, nodes, prims, wide)
     }
 
     /// The total surface area of the nodes of a collapse of `built` that opens nodes greedily
@@ -1180,7 +1180,8 @@ mod tests {
         let (nodes, prims) = flatten_root(&leaf, &Collapse::of(&leaf, 4), &info, &mut [0; 14]);
         assert_eq!((nodes[0].child[0], nodes[0].count[0]), (0, 14));
         assert!(prims[11..14].iter().all(|p| p & PRIM_SPHERE_BIT != 0));
-        let scene = FlatScene::from_tree(tris.clone(), spheres.clone(), nodes, prims);
+        let wide = crate::accel::wide_bvh::one_for_one(&nodes);
+        let scene = FlatScene::from_tree(tris.clone(), spheres.clone(), nodes, prims, wide);
         for i in 0..2000u32 {
             let o = Vec3::new(rnd(i, 20), rnd(i, 21), rnd(i, 22)) * 4.0;
             let d = Vec3::new(rnd(i, 23), rnd(i, 24), rnd(i, 25)) - 0.5;

@@ -512,7 +512,7 @@ mod avx {
             }
             let node = &scene.wide[index as usize];
             // Every occupied slot's slab test first (a node's empty slots come after its
-            // children, `wide_bvh::collapse`), without a branch on its outcome: the children
+            // children, `bvh::build_trees`), without a branch on its outcome: the children
             // that an active lane enters, as bits, and each one's entry and exit distances.
             let mut spans =
                 [(_mm256_setzero_ps(), _mm256_setzero_ps()); crate::accel::wide_bvh::WIDTH];
@@ -1068,7 +1068,7 @@ mod avx {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::build;
+    use crate::accel::bvh::build_trees;
     use crate::layout::{Sphere, Triangle};
     use glam::Vec3;
 
@@ -1102,8 +1102,8 @@ mod tests {
                 ..Default::default()
             })
             .collect::<Vec<_>>();
-        let (nodes, prims) = build(&tris, &spheres);
-        FlatScene::from_tree(tris, spheres, nodes, prims)
+        let (nodes, prims, wide) = build_trees(&tris, &spheres);
+        FlatScene::from_tree(tris, spheres, nodes, prims, wide)
     }
 
     /// The shared edges the rays go through: triangles 10k and 10k + 1, k below this.
@@ -1225,8 +1225,8 @@ mod tests {
             assert_eq!(h.t, 1.0);
         }
         for tris in [vec![a, b], vec![b, a]] {
-            let (nodes, prims) = build(&tris, &[]);
-            let scene = FlatScene::from_tree(tris, vec![], nodes, prims);
+            let (nodes, prims, wide) = build_trees(&tris, &[]);
+            let scene = FlatScene::from_tree(tris, vec![], nodes, prims, wide);
             let scalar = intersect_closest(&scene, &ray, f32::MAX).unwrap();
             let mut hits = [None; 3];
             intersect_closest_packets(&scene, &[ray; 3], &mut hits);
@@ -1246,8 +1246,8 @@ mod tests {
         // Triangle a spans x in [-1, 0]; c, far away, gives the tree a second leaf.
         let a = Triangle::new([0.0, -1.0, 1.0], [0.0, 1.0, 1.0], [-1.0, 0.0, 1.0], 0);
         let c = Triangle::new([5.0, 5.0, 5.0], [6.0, 5.0, 5.0], [5.0, 6.0, 5.0], 0);
-        let (nodes, prims) = build(&[a, c], &[]);
-        let scene = FlatScene::from_tree(vec![a, c], vec![], nodes, prims);
+        let (nodes, prims, wide) = build_trees(&[a, c], &[]);
+        let scene = FlatScene::from_tree(vec![a, c], vec![], nodes, prims, wide);
         // Lane 0 runs in the face x = 0 of a's box; lane 1 enters the box.
         let grazing = Ray {
             o: Vec3::new(0.0, 0.0, 0.0),

@@ -1,13 +1,13 @@
-//! The CPU's eight-wide BVH: one node visit tests up to eight child boxes. A scene's own tree
-//! is collapsed from the binary SAH tree (`bvh::build_trees`, the collapse of least node area);
-//! [`collapse`] makes one from a four-wide tree alone (`FlatScene::from_tree`, for tests and
-//! tools that build a tree themselves).
+//! The CPU's eight-wide BVH: one node visit tests up to eight child boxes. The tree is
+//! collapsed from the binary SAH tree (`bvh::build_trees`, the collapse of least node area);
+//! this module has its node's slab test, and [`one_for_one`], the four-wide tree as wide nodes
+//! (a tree built by hand, `examples/lane_occupancy.rs`).
 //!
 //! The traversal's cost on the CPU is the latency of each node's test-decide-load chain, not the
 //! instruction count (docs/journal/2026-11-23_cpu_traversal.md): a node of eight children is two
 //! independent four-wide slab tests, which the core runs side by side in about the time of one, and
 //! the tree has about half the levels. The leaves are the four-wide tree's own (the same `prims`
-//! ranges, starting at multiples of four for the triangle packs), in the same slot order, so a
+//! ranges, starting at multiples of four for the triangle packs), in the same order, so a
 //! traversal reports the same hits, and the nearest is the same primitive (ties in t go to the
 //! lower primitive id, `bvh::nearer`).
 
@@ -27,13 +27,6 @@ struct Slot {
     count: u32,
 }
 
-impl Slot {
-    fn area(&self) -> f32 {
-        let d = (self.hi - self.lo).max(Vec3::ZERO);
-        d.x * d.y + d.y * d.z + d.z * d.x
-    }
-}
-
 fn slots(node: &BvhNode) -> ArrayVec<Slot, 4> {
     (0..4)
         .filter(|&c| node.count[c] != EMPTY_SLOT)
@@ -49,19 +42,6 @@ fn slots(node: &BvhNode) -> ArrayVec<Slot, 4> {
         .collect()
 }
 
-/// The wide tree of a four-wide one, root first (trees that tests and tools build; a scene's own
-/// comes from `bvh::build_trees`). Each wide node starts from a four-wide node's
-/// children and opens the interior child of largest surface area while its children fit in the
-/// eight slots (the collapse that made the four-wide tree of the binary one, `bvh::flatten`); an
-/// opened child's children take its place, so leaves keep their relative order.
-pub fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
-    let mut wide = Vec::with_capacity(nodes.len().div_ceil(2).max(1));
-    if !nodes.is_empty() {
-        append(nodes, 0, true, &mut wide);
-    }
-    wide
-}
-
 /// The four-wide tree itself as wide nodes, one for one, each with its four slots in the first
 /// row and the other rows empty: the CPU's traversal over it visits exactly the nodes, in
 /// exactly the order, that the shader's traversal of the four-wide tree visits, so
@@ -69,31 +49,15 @@ pub fn collapse(nodes: &[BvhNode]) -> Vec<WideNode> {
 pub fn one_for_one(nodes: &[BvhNode]) -> Vec<WideNode> {
     let mut wide = Vec::with_capacity(nodes.len());
     if !nodes.is_empty() {
-        append(nodes, 0, false, &mut wide);
+        append(nodes, 0, &mut wide);
     }
     wide
 }
 
-/// Appends the wide node made from four-wide node `index` (its children opened while they fit
-/// where `open_children`) and its descendants, depth first; returns its index.
-fn append(nodes: &[BvhNode], index: usize, open_children: bool, wide: &mut Vec<WideNode>) -> u32 {
-    let mut open: Vec<Slot> = slots(&nodes[index]).to_vec();
-    // The interior child of largest surface area whose children fit in its place, if any.
-    let widest = |open: &[Slot]| {
-        open.iter()
-            .enumerate()
-            .filter(|(_, s)| {
-                s.count == 0 && open.len() - 1 + slots(&nodes[s.child as usize]).len() <= WIDTH
-            })
-            .max_by(|a, b| a.1.area().total_cmp(&b.1.area()))
-            .map(|(i, _)| i)
-    };
-    if open_children {
-        while let Some(i) = widest(&open) {
-            let children = slots(&nodes[open[i].child as usize]);
-            open.splice(i..=i, children);
-        }
-    }
+/// Appends the wide node of four-wide node `index` (its slots in the first row) and its
+/// descendants, depth first; returns its index.
+fn append(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+    let open = slots(&nodes[index]);
     let at = wide.len();
     wide.push(WideNode::default());
     let mut node = WideNode::default();
@@ -107,7 +71,7 @@ fn append(nodes: &[BvhNode], index: usize, open_children: bool, wide: &mut Vec<W
         node.max_z[h][l] = s.hi.z;
         node.count[c] = s.count;
         node.child[c] = if s.count == 0 {
-            append(nodes, s.child as usize, open_children, wide)
+            append(nodes, s.child as usize, wide)
         } else {
             s.child
         };
@@ -203,18 +167,16 @@ mod tests {
     }
 
     #[test]
-    fn collapse_keeps_every_leaf_its_box_and_its_order() {
+    fn the_wide_tree_keeps_every_leaf_its_box_and_its_order() {
         for n in [1, 3, 5, 17, 300, 5000] {
-            let (nodes, _) = crate::accel::bvh::build(&soup(n), &[]);
-            let wide = collapse(&nodes);
+            let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(n), &[]);
             assert!(same_leaves(&nodes, &wide), "{n} triangles");
         }
     }
 
     #[test]
-    fn collapse_halves_the_levels_of_a_large_tree() {
-        let (nodes, _) = crate::accel::bvh::build(&soup(5000), &[]);
-        let wide = collapse(&nodes);
+    fn the_wide_tree_has_fewer_levels_than_the_four_wide_one() {
+        let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(5000), &[]);
         assert!(
             wide.len() * 3 < nodes.len() * 2,
             "{} wide nodes for {} four-wide ones",
@@ -237,8 +199,7 @@ mod tests {
     /// The check above fails when a slot goes missing: it can tell a broken collapse.
     #[test]
     fn a_dropped_slot_is_caught() {
-        let (nodes, _) = crate::accel::bvh::build(&soup(300), &[]);
-        let mut wide = collapse(&nodes);
+        let (nodes, _, mut wide) = crate::accel::bvh::build_trees(&soup(300), &[]);
         let last = wide.len() - 1;
         let c = (0..WIDTH)
             .rev()
@@ -253,8 +214,7 @@ mod tests {
     /// and the same verdict, occupied slots only, in the slot's bit of the mask.
     #[test]
     fn the_wide_slab_test_is_the_slab_test_of_each_slot() {
-        let (nodes, _) = crate::accel::bvh::build(&soup(2000), &[]);
-        let wide = collapse(&nodes);
+        let (_, _, wide) = crate::accel::bvh::build_trees(&soup(2000), &[]);
         let node = &wide[0];
         for i in 0..1000u32 {
             let r = |k| {
