@@ -991,12 +991,13 @@ fn summarise(
         film.dropped(),
     );
     if let Some(first) = report.first_pass {
+        // The passes after the first: their samples per pixel, camera paths and seconds.
         let rest = report.seconds - first.seconds;
         let rest_spp = (film.spp() - before) as f64 - first.spp;
         let rate = if rest > 0.0 && rest_spp > 0.0 {
             format!(
                 "; the other {rest_spp:.0} spp at {:.3} M camera paths/s",
-                rest_spp * pixels as f64 / rest / 1e6
+                (paths - first.spp * pixels as f64) / rest / 1e6
             )
         } else {
             String::new()
