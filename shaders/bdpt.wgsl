@@ -12,10 +12,6 @@
 // together in SIMD packets and then sums each subpath's terms in the order met, which gives the
 // same sums.
 
-// Whether the method takes BDPT's strategies (BDPT, VCM; not SPPM).
-fn connects() -> bool {
-    return frame.method != METHOD_SPPM;
-}
 
 // Whether surface points a and b (points, error bounds, unit normals) see each other, after
 // Russian roulette on the ray by `value`, the contribution it would bring (drawing u): the factor
@@ -236,6 +232,9 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
             if merges() && (q_merge >= 1.0 || draw4(sampler, dim_merge(bounce)).x < q_merge) {
                 var gathered = vec3<f32>(0.0);
                 let camera_share = merge_camera_share(m, merge, pdf_rev);
+                // The photon's record holds its light side's share at the iteration's radius
+                // (PhotonRecord); within share * r it scales as vc, by 1 / mis(share^2).
+                let vc_share = mis(share * share);
                 // As on the CPU: at share 1, (1 * r_i)^2 is the grid's own r_i^2 to the bit.
                 let radius = share * frame.merge_radius;
                 let radius2 = radius * radius;
@@ -244,23 +243,20 @@ fn trace_camera_path(x: u32, y: u32, n_c: f32, sampler: Sampler, path: u32, own:
                     let b = q.b[j];
                     let end = atomicLoad(&grid_starts[b + 1u]);
                     for (var e = atomicLoad(&grid_starts[b]); e < end; e++) {
-                        let entry = grid_entries[e];
-                        let d = entry.xyz - hit.p;
+                        let d = grid_entries[e].xyz - hit.p;
                         if dot(d, d) >= radius2 {
                             continue;
                         }
-                        let v = light_vertices[bitcast<u32>(entry.w)];
-                        if depth + v.length > max_edges || dot(v.n, n_facing) <= 0.0 {
+                        let photon = photon_records[e];
+                        if depth + photon.length > max_edges || dot(photon.n, n_facing) <= 0.0 {
                             continue;
                         }
                         // subpath.rs: weight_merge, its two sides added as the CPU adds them.
                         var w = 1.0;
                         if connects() {
-                            let light_mis = SubpathMis(v.d_vcm, v.d_vc, v.d_vm);
-                            let cos_light = dot(v.n, v.wo);
-                            w = 1.0 / (merge_light_share(light_mis, merge, cos_light * FRAC_1_PI) + 1.0 + camera_share);
+                            w = 1.0 / (photon.w_light / vc_share + 1.0 + camera_share);
                         }
-                        gathered += v.throughput * w;
+                        gathered += photon.throughput * w;
                     }
                 }
                 if frame.merge_rr_undivided != 0u {

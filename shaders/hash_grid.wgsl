@@ -4,8 +4,9 @@
 // (the bucket count from the vertex count), grid_count (an atomic count per bucket),
 // grid_scan_blocks, grid_scan_sums and grid_scan_add (the prefix sum), grid_scatter (each vertex
 // to its bucket's next slot, by an atomic cursor), grid_sort (each bucket in the order of its
-// vertices' light subpath and length, which is the CPU's vertex order). So the buckets list the
-// same vertices in the same order on both backends, and merges sum in the same order.
+// vertices' light subpath and length, which is the CPU's vertex order), then grid_records (what
+// a merge reads of each entry's vertex, in entry order). So the buckets list the same vertices in
+// the same order on both backends, and merges sum in the same order.
 
 // The grid's constants (`GridParams`): the host writes min, inv_cell and radius2, grid_setup
 // the mask and the count.
@@ -25,6 +26,8 @@ struct GridParams {
 @group(1) @binding(5) var<storage, read_write> grid_entries: array<vec4<f32>>;
 // Each bucket's next free slot during the scatter.
 @group(1) @binding(6) var<storage, read_write> grid_cursor: array<atomic<u32>>;
+// What a merge reads of entry e's vertex, at photon_records[e] (grid_records).
+@group(1) @binding(7) var<storage, read_write> photon_records: array<PhotonRecord>;
 
 // Cell coordinates are clamped to +-2^30 before hashing (`CELL_LIMIT`).
 const CELL_LIMIT: f32 = 1073741824.0;
@@ -235,6 +238,18 @@ fn grid_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         grid_entries[j] = e;
     }
+}
+
+// One invocation per entry, after grid_sort: the record of its vertex, in entry order
+// (PhotonRecord; the CPU's Iteration::build_grid), so that a merge reads 32 bytes beside the
+// entries it has just read instead of the vertex wherever the pool holds it.
+@compute @workgroup_size(64, 1, 1)
+fn grid_records(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = frame.path_origin + gid.x;
+    if e >= grid_params.count {
+        return;
+    }
+    photon_records[e] = photon_record(light_vertices[bitcast<u32>(grid_entries[e].w)]);
 }
 
 // For tests (`GpuRenderer::grid_check`): per query point i (camera_radiance[i].xyz, i <

@@ -28,18 +28,18 @@ fn density(p: vec3<f32>, n_facing: vec3<f32>, depth: u32, map: u32) -> vec3<f32>
         let b = q.b[j];
         let end = atomicLoad(&grid_starts[b + 1u]);
         for (var e = atomicLoad(&grid_starts[b]); e < end; e++) {
-            let entry = grid_entries[e];
-            let d = entry.xyz - p;
+            let d = grid_entries[e].xyz - p;
             if dot(d, d) >= radius2 {
                 continue;
             }
-            let v = light_vertices[bitcast<u32>(entry.w)];
-            // d_vm > 0: the photon scattered diffusely before (the global map).
-            let caustic = v.d_vm <= 0.0;
-            if (map == PHOTON_MAP_CAUSTIC && !caustic) || depth + v.length > max_edges || dot(v.n, n_facing) <= 0.0 {
+            let photon = photon_records[e];
+            // d_vm > 0 (the record's w_light without connections): the photon scattered
+            // diffusely before (the global map).
+            let caustic = photon.w_light <= 0.0;
+            if (map == PHOTON_MAP_CAUSTIC && !caustic) || depth + photon.length > max_edges || dot(photon.n, n_facing) <= 0.0 {
                 continue;
             }
-            gathered += v.throughput;
+            gathered += photon.throughput;
         }
     }
     return gathered * frame.merge_normalization;

@@ -27,6 +27,16 @@ struct LightVertex {
 
 const NO_VERTEX: u32 = 0xffffffffu;
 
+// What a merge reads of a light vertex, in the hash grid's entry order (subpath.rs:
+// PhotonRecord, the same layout): the normal, the length, alpha, and the light side's part of the
+// merge weight's denominator at the iteration's radius, or d_vm where merges are not weighed.
+struct PhotonRecord {
+    n: vec3<f32>,
+    length: u32,
+    throughput: vec3<f32>,
+    w_light: f32,
+}
+
 // The bounce from which BDPT's and VCM's light subpaths are rouletted (src/transport/subpath.rs
 // says why it is earlier than the path tracer's RR_START_BOUNCE).
 const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1u;
@@ -70,6 +80,12 @@ fn iteration_merge() -> MergeMis {
 fn merge_within(merge: MergeMis, share: f32) -> MergeMis {
     let s = mis(share * share);
     return MergeMis(merge.vm * s, merge.vc / s, merge.camera_goes_on);
+}
+
+// Whether the method takes BDPT's strategies and weighs every strategy against them
+// (Method::connects: BDPT, VCM, vcm-full; not SPPM or photon-map).
+fn connects() -> bool {
+    return frame.method == METHOD_BDPT || frame.method == METHOD_VCM || frame.method == METHOD_VCM_FULL;
 }
 
 // Whether this iteration merges photons (SPPM, VCM, photon-map, at a radius above 0).
@@ -195,6 +211,19 @@ fn merge_light_share(light: SubpathMis, merge: MergeMis, camera_to_light: f32) -
         beyond = light.d_vm * mis(camera_to_light);
     }
     return light.d_vcm * merge.vc + beyond;
+}
+
+// The record of light vertex v in this iteration (PhotonRecord::new): merge_light_share with
+// the photon's cos theta / pi toward its previous vertex where the method weighs its merges
+// (VCM), else the vertex's d_vm.
+fn photon_record(v: LightVertex) -> PhotonRecord {
+    var w_light = v.d_vm;
+    if connects() {
+        let light_mis = SubpathMis(v.d_vcm, v.d_vc, v.d_vm);
+        let cos_light = dot(v.n, v.wo);
+        w_light = merge_light_share(light_mis, iteration_merge(), cos_light * FRAC_1_PI);
+    }
+    return PhotonRecord(v.n, v.length, v.throughput, w_light);
 }
 
 // The camera side's part of weight_merge's denominator, which does not depend on the photon.

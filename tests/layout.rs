@@ -9,7 +9,7 @@ use hexray::gpu::shader::{source, validate, ArrayLengths, Residency};
 use hexray::layout::{BvhNode, Emitter, Material, PlanarMirror, Sphere, Triangle};
 use hexray::transport::camera::Camera;
 use hexray::transport::patches::{Patch, PatchGrid};
-use hexray::transport::subpath::LightVertex;
+use hexray::transport::subpath::{LightVertex, PhotonRecord};
 use std::mem::{offset_of, size_of};
 
 macro_rules! rust_layout {
@@ -162,6 +162,12 @@ fn shared_structs_match_their_wgsl_declarations_field_by_field() {
             d_vc,
             d_vm,
             path
+        }),
+        rust_layout!(PhotonRecord {
+            n,
+            length,
+            throughput,
+            w_light
         }),
         rust_layout!(PixelSums {
             sum,

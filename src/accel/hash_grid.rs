@@ -10,7 +10,7 @@
 //! entry the vertex's position and index in one vec4 (the index's bits in w), so that a query
 //! reads its buckets' positions contiguously and loads only the vertices within r (the GPU by
 //! index; the CPU reads a copy of what a merge needs, kept in entry order and named by the
-//! entry's slot: `cpu::bdpt::PhotonRecord`, [`HashGrid::finish_query_slots`]).
+//! entry's slot: `transport::subpath::PhotonRecord`, [`HashGrid::finish_query_slots`]).
 //! `shaders/hash_grid.wgsl` builds the same arrays with atomics and a scan dispatch and then
 //! sorts each bucket, so both backends hold the same grid bit for bit.
 //!

@@ -15,7 +15,7 @@
 //! (of any pixel's light subpath) within the radius r, found in the hash grid
 //! (`crate::accel::hash_grid`), weighed by MIS with all the others (`subpath::weight_merge`, its
 //! two sides added here: `merge_camera_share` once per query, `merge_light_share` per photon, which
-//! the CPU keeps in a `PhotonRecord`; the same arithmetic in the same order). With the radius 0 it
+//! both backends keep in a `PhotonRecord` per grid entry; the same arithmetic in the same order). With the radius 0 it
 //! is BDPT, bit for bit. SPPM is the special case without connections (Georgiev's PPM, as Knaus and
 //! Zwicker's probabilistic PPM): the camera subpath follows mirrors and glass to its first diffuse
 //! vertex, merges there with weight 1 and stops; it keeps the emission it meets on the way, the
@@ -51,8 +51,8 @@ use crate::transport::planar_mirror::{
     image, planar_mirror_of, starts_by_a_mirror, takes_mirror_light,
 };
 use crate::transport::subpath::{
-    density_vanishes, merge_camera_share, merge_light_share, merge_survival, shadow_survival,
-    weight_connection, weight_emission, weight_next_event, LightVertex, MergeMis, SubpathMis,
+    density_vanishes, merge_camera_share, merge_survival, shadow_survival, weight_connection,
+    weight_emission, weight_next_event, LightVertex, MergeMis, PhotonRecord, SubpathMis,
     MERGE_RR_THRESHOLD,
 };
 use glam::Vec3;
@@ -90,56 +90,6 @@ pub struct Photons<'a> {
     pub records: &'a [PhotonRecord],
     pub grid: &'a HashGrid,
     pub normalization: f32,
-}
-
-/// What a merge reads of a light vertex (step 6), in the grid's entry order: 32 bytes, two to a
-/// cache line, beside the entries a query has just read. The CPU alone keeps this copy. A query
-/// that reads the 80-byte `LightVertex` at the index its entry names waits on a cache miss per
-/// photon; at 512x512 (four times the photons a query finds at 256x256) that load holds a third
-/// of the camera pass's time (docs/journal/2026-11-25_merge_queries.md). The arithmetic is the
-/// same, so the images are bit for bit those of reading the vertex.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(32))]
-pub struct PhotonRecord {
-    /// The vertex's normal, turned to the side the light arrived from.
-    pub n: [f32; 3],
-    /// Edges from the light point (`LightVertex::length`).
-    pub length: u32,
-    /// α (`LightVertex::throughput`).
-    pub throughput: [f32; 3],
-    /// The light side's part of the merge weight's denominator
-    /// (`subpath::merge_light_share`, with the photon's cos θ / π toward its previous vertex).
-    /// Without connections (SPPM, photon-map), whose weights are 1, the vertex's d_vm instead:
-    /// above 0 exactly where its subpath scattered diffusely before it, which puts the photon in
-    /// photon-map's global map (`photon_map.rs`; SPPM reads nothing of it).
-    pub w_light: f32,
-}
-
-const _: () = assert!(std::mem::size_of::<PhotonRecord>() == 32);
-
-impl PhotonRecord {
-    /// The record of vertex `v` in an iteration with merging constants `merge`; `connects`
-    /// says whether merges are weighed against other strategies (VCM) or not (SPPM).
-    #[inline]
-    pub fn new(v: &LightVertex, merge: &MergeMis, connects: bool) -> PhotonRecord {
-        let w_light = if connects {
-            let light_mis = SubpathMis {
-                d_vcm: v.d_vcm,
-                d_vc: v.d_vc,
-                d_vm: v.d_vm,
-            };
-            let cos_light = Vec3::from(v.n).dot(Vec3::from(v.wo));
-            merge_light_share(&light_mis, merge, cos_light * FRAC_1_PI)
-        } else {
-            v.d_vm
-        };
-        PhotonRecord {
-            n: v.n,
-            length: v.length,
-            throughput: v.throughput,
-            w_light,
-        }
-    }
 }
 
 impl CameraPass<'_> {

@@ -22,7 +22,7 @@ use crate::transport::camera::Camera;
 use crate::transport::merging::{kernel_normalization, MergeRadius};
 use crate::transport::method::Method;
 use crate::transport::splat::Splats;
-use crate::transport::subpath::{LightVertex, MergeMis};
+use crate::transport::subpath::{LightVertex, MergeMis, PhotonRecord};
 use light_path::{LightPass, LightPassMode};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -322,8 +322,8 @@ pub struct LightPassBuffers {
     pub vertices: Vec<LightVertex>,
     pub starts: Vec<u32>,
     pub grid: HashGrid,
-    /// The photons' records in the grid's entry order (merging; `bdpt::PhotonRecord`).
-    pub records: Vec<bdpt::PhotonRecord>,
+    /// The photons' records in the grid's entry order (merging; `PhotonRecord`).
+    pub records: Vec<PhotonRecord>,
     /// The grid's origin: the scene's bounding-box corner (`merging::scene_bounds`).
     pub grid_min: glam::Vec3,
     /// The merge radius's schedule (SPPM, VCM).
@@ -567,9 +567,11 @@ impl Iteration<'_> {
         let (vertices, connects) = (&buffers.vertices, self.method.connects());
         buffers.records.clear();
         buffers.records.par_extend(
-            buffers.grid.entries.par_iter().map(|e| {
-                bdpt::PhotonRecord::new(&vertices[entry_index(e) as usize], merge, connects)
-            }),
+            buffers
+                .grid
+                .entries
+                .par_iter()
+                .map(|e| PhotonRecord::new(&vertices[entry_index(e) as usize], merge, connects)),
         );
     }
 

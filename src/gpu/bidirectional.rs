@@ -34,7 +34,7 @@ use super::pipeline::{buffer_entries, compute_pipeline, storage, Kernel};
 use crate::accel::hash_grid::GridParams;
 use crate::transport::merging::MergeRadius;
 use crate::transport::method::Method;
-use crate::transport::subpath::LightVertex;
+use crate::transport::subpath::{LightVertex, PhotonRecord};
 use anyhow::Result;
 use wgpu::util::DeviceExt;
 
@@ -68,6 +68,7 @@ pub(in crate::gpu) struct Merging {
     pub(in crate::gpu) scan_add: wgpu::ComputePipeline,
     pub(in crate::gpu) scatter: wgpu::ComputePipeline,
     pub(in crate::gpu) sort: wgpu::ComputePipeline,
+    pub(in crate::gpu) records: wgpu::ComputePipeline,
     /// The tests' search (`grid_query_check`).
     pub(in crate::gpu) query_check: wgpu::ComputePipeline,
     pub(in crate::gpu) radius: MergeRadius,
@@ -144,6 +145,13 @@ impl Pool {
         let grid_starts = storage(device, "grid starts", 4 * (buckets + 1));
         let grid_cursor = storage(device, "grid cursor", 4 * (buckets + 1));
         let grid_entries = storage(device, "grid entries", 16 * capacity as u64);
+        // What a merge reads of each entry's vertex (`PhotonRecord`), in entry order; the bind
+        // group keeps it.
+        let photon_records = storage(
+            device,
+            "photon records",
+            capacity as u64 * std::mem::size_of::<PhotonRecord>() as u64,
+        );
         let buffers = [
             &vertices,
             tallies,
@@ -152,6 +160,7 @@ impl Pool {
             &grid_starts,
             &grid_entries,
             &grid_cursor,
+            &photon_records,
         ];
         let entries = buffer_entries(buffers.into_iter());
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -192,8 +201,8 @@ impl Bidirectional {
         let band_pixels = band_rows as u64 * width as u64;
         let tallies_size = 4 * tally_words(band_pixels);
         // The pool: room for the whole image at the first estimate, within what the device
-        // binds (light tracing stores nothing). Grid entries are 16 bytes a vertex, the
-        // vertices 80, so the vertices bound the pool.
+        // binds (light tracing stores nothing). Grid entries are 16 bytes a vertex, photon
+        // records 32, the vertices 80, so the vertices bound the pool.
         let max_capacity = (max_binding / vertex_size).min(u32::MAX as u64 / 2) as u32;
         let capacity = match method {
             Method::Light => 1,
@@ -241,7 +250,7 @@ impl Bidirectional {
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("light subpaths"),
-            entries: &(0..7).map(entry).collect::<Vec<_>>(),
+            entries: &(0..8).map(entry).collect::<Vec<_>>(),
         });
         let pool = Pool::new(device, &layout, capacity, &tallies, &camera_radiance);
         let layouts = [scene_layout, &layout];
@@ -254,6 +263,7 @@ impl Bidirectional {
             scan_add: pipeline("grid_scan_add"),
             scatter: pipeline("grid_scatter"),
             sort: pipeline("grid_sort"),
+            records: pipeline("grid_records"),
             query_check: pipeline("grid_query_check"),
             radius: default_radius,
             grid_min: crate::transport::merging::scene_bounds(scene).0,

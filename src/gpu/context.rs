@@ -115,8 +115,9 @@ pub fn acquire(wanted: Option<&str>) -> Result<Gpu, GpuError> {
     let info = adapter.get_info();
     let have = adapter.limits();
     // WebGPU's default limits, with buffer sizes as large as the adapter allows, for big
-    // scenes and images, and as many storage buffers per stage as it allows: path tracing binds
-    // 8 (WebGPU's default), light tracing and BDPT 11.
+    // scenes and images, and as many storage buffers per stage as it allows: with the scene in
+    // storage buffers, path tracing binds 8 (WebGPU's default), the light pass 9 and the camera
+    // pass 13.
     let limits = wgpu::Limits {
         max_storage_buffer_binding_size: have.max_storage_buffer_binding_size,
         max_buffer_size: have.max_buffer_size,

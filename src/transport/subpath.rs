@@ -220,6 +220,58 @@ pub struct LightVertex {
 /// The end of a light subpath's list of vertices (`LightVertex::next`).
 pub const NO_VERTEX: u32 = u32::MAX;
 
+/// What a merge reads of a light vertex (step 6 of the camera pass), in the hash grid's entry
+/// order: 32 bytes, two to a cache line, beside the entries a query has just read. Both backends
+/// build it once per photon and iteration (the CPU in `Iteration::build_grid`, the GPU in
+/// `grid_records`, `shaders/hash_grid.wgsl`, the same layout as `PhotonRecord` in
+/// `shaders/subpath.wgsl`). A query that read the 80-byte [`LightVertex`] at the index its entry
+/// names would wait on a cache miss per photon: on the CPU at 512x512 (four times the photons a
+/// query finds at 256x256) that load held a third of the camera pass's time
+/// (docs/journal/2026-11-25_merge_queries.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[repr(C, align(32))]
+pub struct PhotonRecord {
+    /// The vertex's normal, turned to the side the light arrived from.
+    pub n: [f32; 3],
+    /// Edges from the light point (`LightVertex::length`).
+    pub length: u32,
+    /// α (`LightVertex::throughput`).
+    pub throughput: [f32; 3],
+    /// The light side's part of the merge weight's denominator
+    /// ([`merge_light_share`], with the photon's cos θ / π toward its previous vertex).
+    /// Without connections (SPPM, photon-map), whose weights are 1, the vertex's d_vm instead:
+    /// above 0 exactly where its subpath scattered diffusely before it, which puts the photon in
+    /// photon-map's global map (`cpu/photon_map.rs`; SPPM reads nothing of it).
+    pub w_light: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<PhotonRecord>() == 32);
+
+impl PhotonRecord {
+    /// The record of vertex `v` in an iteration with merging constants `merge`; `connects`
+    /// says whether merges are weighed against other strategies (VCM) or not (SPPM).
+    #[inline]
+    pub fn new(v: &LightVertex, merge: &MergeMis, connects: bool) -> PhotonRecord {
+        let w_light = if connects {
+            let light_mis = SubpathMis {
+                d_vcm: v.d_vcm,
+                d_vc: v.d_vc,
+                d_vm: v.d_vm,
+            };
+            let cos_light = Vec3::from(v.n).dot(Vec3::from(v.wo));
+            merge_light_share(&light_mis, merge, cos_light * std::f32::consts::FRAC_1_PI)
+        } else {
+            v.d_vm
+        };
+        PhotonRecord {
+            n: v.n,
+            length: v.length,
+            throughput: v.throughput,
+            w_light,
+        }
+    }
+}
+
 /// The constants that merging adds to the MIS weights of an iteration: `vm` = η^β weighs the
 /// merging strategies against a connection, `vc` = η^−β a connection against merging, with
 /// η = π r² N (see the module comment). Both 0 without merging (BDPT).
@@ -471,7 +523,7 @@ pub fn weight_merge(
 /// The light side's part of [`weight_merge`]'s denominator: the strategies that connect or
 /// merge on the light subpath, relative to merging here. It does not depend on the camera
 /// vertex (the photon is taken as arrived there), so the CPU computes it once per photon and
-/// iteration (`cpu::bdpt::PhotonRecord`).
+/// iteration ([`PhotonRecord`]).
 #[inline]
 pub fn merge_light_share(light: &SubpathMis, merge: &MergeMis, camera_to_light: f32) -> f32 {
     // The connection at the camera vertex (d_vcm), and the strategies whose camera subpath

@@ -216,6 +216,8 @@ impl GpuRenderer {
         self.mark("grid scatter");
         self.item_dispatches(&m.sort, frame, buckets);
         self.mark("grid sort");
+        self.item_dispatches(&m.records, frame, b.capacity);
+        self.mark("grid records");
     }
 
     /// For tests: the hash grid the GPU builds over `points` (stored as the light vertices of
