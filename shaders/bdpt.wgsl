@@ -12,7 +12,6 @@
 // together in SIMD packets and then sums each subpath's terms in the order met, which gives the
 // same sums.
 
-
 // Whether surface points a and b (points, error bounds, unit normals) see each other, after
 // Russian roulette on the ray by `value`, the contribution it would bring (drawing u): the factor
 // to multiply the contribution by, 1 / q where the ray was traced and found clear, else 0
