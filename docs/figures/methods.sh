@@ -73,6 +73,23 @@ mitsuba_curve() {
         --seconds "$seconds" --integrator "$integrator"
 }
 
+# Whether FILE is the overlay CSV `hexray curve --overlay` reads: its header, then rows of six
+# fields whose last four are numbers.
+well_formed() {
+    python3 - "$1" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+def row_ok(row):
+    fields = row.split(",")
+    try:
+        return len(fields) == 6 and all(float(x) == float(x) for x in fields[2:])
+    except ValueError:
+        return False
+ok = lines[:1] == ["scene,variant,spp,seconds,rmse,relmse"] and all(row_ok(r) for r in lines[1:])
+sys.exit(0 if ok else 1)
+PY
+}
+
 run() {
     local backends=cpu
     have_gpu && backends=cpu,gpu
@@ -85,10 +102,17 @@ run() {
         local overlay=()
         if have_mitsuba; then
             echo "== $name: Mitsuba path and ptracer, $seconds s each"
-            {
-                mitsuba_curve "$scene" "$ref" "$size" path
-                mitsuba_curve "$scene" "$ref" "$size" ptracer | tail -n +2
-            } > "$dir/mitsuba.csv"
+            # Measured again once if a row comes out malformed (seen once: a newline
+            # replaced by another byte), rather than failing the run at `hexray curve`.
+            for attempt in 1 2; do
+                {
+                    mitsuba_curve "$scene" "$ref" "$size" path
+                    mitsuba_curve "$scene" "$ref" "$size" ptracer | tail -n +2
+                } > "$dir/mitsuba.csv"
+                well_formed "$dir/mitsuba.csv" && break
+                echo "Mitsuba's curves of $name are malformed (attempt $attempt)" >&2
+            done
+            well_formed "$dir/mitsuba.csv" || exit 1
             overlay=(--overlay "$dir/mitsuba.csv")
         fi
         echo "== $name: hexray $backends, path, light, bdpt, $seconds s each"
