@@ -87,7 +87,10 @@ EOF
 
 report() {
     mkdir -p "$out"
-    git describe --always --dirty > "$out/commit.txt" 2> /dev/null || true
+    # Described before the file is written: writing it first would mark the tree dirty.
+    local commit
+    commit=$(git describe --always --dirty 2> /dev/null || true)
+    echo "$commit" > "$out/commit.txt"
     local adapter
     adapter=$("$hexray" info 2>/dev/null | sed -n 's/^\[0\] //p' | head -1)
     echo "$(nproc) cores ($(sed -n 's/^model name\s*: //p' /proc/cpuinfo | head -1)); GPU backend on ${adapter:-no adapter}" \
