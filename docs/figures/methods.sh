@@ -94,7 +94,10 @@ run() {
     local backends=cpu
     have_gpu && backends=cpu,gpu
     mkdir -p "$out"
-    git describe --always --dirty > "$out/commit.txt" 2> /dev/null || true
+    # Described before the file is written: writing it first would mark the tree dirty.
+    local commit
+    commit=$(git describe --always --dirty 2> /dev/null || true)
+    echo "$commit" > "$out/commit.txt"
     scene_list | while read -r name scene ref size; do
         [ -f "$ref" ] || { echo "missing $ref: run docs/figures/methods.sh references first" >&2; exit 1; }
         local dir=$out/$name
@@ -152,7 +155,9 @@ readme() {
             > "$out/readme_$which.json"
         grep '^rendered' "out/methods/readme_$which.log" > "$out/readme_$which.txt"
     done
-    git describe --always --dirty > "$out/readme_commit.txt" 2> /dev/null || true
+    local commit
+    commit=$(git describe --always --dirty 2> /dev/null || true)
+    echo "$commit" > "$out/readme_commit.txt"
     cp out/methods/readme_default.png docs/figures/tncg15_room.png
     cp out/methods/readme_path.png "$out/tncg15_room_512_path_64spp.png"
 }
