@@ -445,6 +445,12 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -
             n as f32
         }
     };
+    // A node's visit in the units of `leaf_cost`.
+    let traversal = if packed {
+        TRAVERSAL_COST
+    } else {
+        TRAVERSAL_COST_PER_PRIMITIVE
+    };
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for p in info.iter() {
@@ -496,11 +502,6 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -
             if n == 0 || n == count {
                 continue;
             }
-            let traversal = if packed {
-                TRAVERSAL_COST
-            } else {
-                TRAVERSAL_COST_PER_PRIMITIVE
-            };
             let cost = traversal + (leaf_cost(n) * acc.area() + right_cost[b]) / bounds.area();
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
