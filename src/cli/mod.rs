@@ -125,7 +125,7 @@ pub(crate) fn parse_alpha(s: &str) -> std::result::Result<f32, String> {
     }
 }
 
-/// Parses the command line and runs the subcommand; the exit status follows the README's table.
+/// Parses the command line and runs the subcommand; the exit status follows docs/usage.md's table.
 pub fn run() -> ExitCode {
     let cli = Cli::parse();
     let args = match cli.command {

@@ -84,7 +84,7 @@ pub(crate) struct RenderArgs {
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
-    /// Light subpaths per iteration N of every method but path and whitted, at most one per pixel
+    /// Light subpaths per iteration N of every method but path, whitted and radiosity, at most one per pixel
     /// (more are cut to that): photon-map's photon paths. Default: one per pixel, up to 262144
     /// (512x512) for sppm, vcm, vcm-full and photon-map
     /// and 1048576 for light and bdpt; beyond, the camera subpaths share them (pixel index mod
@@ -95,9 +95,9 @@ pub(crate) struct RenderArgs {
     /// (path tracing only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=hexray::math::sampling::MAX_LIGHT_SAMPLES as i64))]
     pub(crate) light_samples: u32,
-    /// Samples per pixel (iterations for all methods but path). Without --time the default is
-    /// 64 for path and 8 for the others (about as long at 512x512); with --time, no
-    /// sample limit.
+    /// Samples per pixel (iterations for the methods with light subpaths). Without --time the
+    /// default is 64 for path, whitted and radiosity and 8 for the others (about as long at
+    /// 512x512); with --time, no sample limit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) spp: Option<u32>,
     /// Time budget in seconds: stop after the pass that reaches it, keeping all samples.
@@ -216,7 +216,7 @@ pub(crate) fn merge_radius_of(
     if !method.splats() && light_paths.is_some() {
         return Err(format!(
             "--light-paths is for the methods that trace light subpaths (light, bdpt, sppm, vcm, \
-             vcm-full), not {method}"
+             vcm-full, photon-map), not {method}"
         ));
     }
     let mut r = hexray::transport::merging::MergeRadius::default_for(flat, camera, method);
