@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Adaptive sampling against uniform sampling at equal time (issue 48), path tracing on the CPU,
+# Adaptive sampling against uniform sampling at equal time, path tracing on the CPU,
 # and the most that any per-pixel allocation could gain on each scene.
 #
 #   benches/adaptive.sh [OUT]      (default OUT: docs/records/adaptive)

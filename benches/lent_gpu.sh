@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The one call to make on a lent GPU (issue 46), from binaries and data prepared here by
+# The one call to make on a lent GPU, from binaries and data prepared here by
 # benches/lent_gpu_prepare.sh; it builds nothing. In one run:
 #   1. benches/real_gpu.sh without its curves: the adapter, the integration tests, `hexray bench`
 #      of every method on both backends at 256x256 and on the GPU at 512x512, the first image
-#      (800x800, 50 spp) cold and warm, issue 7's goal, and the bidirectional stage times;
+#      (800x800, 50 spp) cold and warm, its steady-state bench, and the bidirectional stage times;
 #   2. hexray's path tracer beside Mitsuba 3's cuda_ad_rgb on the same GPU, alternating, ROUNDS
 #      rounds: camera paths/s on the three reference scenes at 256x256 and 512x512, and the
 #      800x800 50-spp render (Mitsuba: ../shared/mitsuba/gpu/mi_gpu_bench.py; hexray: `hexray
@@ -13,7 +13,7 @@
 #
 #   run(command="bash benches/lent_gpu.sh", carry=[".gl", ".devbin"], timeout_s=590)
 #
-# About 7 minutes on an H200 with 16 cores (an estimate: no GPU has run it yet); the side by side
+# About 7 minutes on an H200 with 16 cores (estimated); the side by side
 # skips its later rounds past 7 minutes.
 #
 # Environment: ROUNDS (default 2), SPP_256 (default 2048) and SPP_512 (default 512), hexray's

@@ -61,7 +61,7 @@ step "bench 512x512, gpu"
     --out "$out/bench_512.json" > "$out/bench_512.txt" 2>&1
 cat "$out/bench_512.txt"
 
-# Issue 46's first image, as a user runs it: the whole process, cold (the driver's shader cache
+# The first image, as a user runs it: the whole process, cold (the driver's shader cache
 # pointed at an empty folder: NVIDIA's and Mesa's; hexray's pipeline cache empty), then with
 # hexray's pipeline cache alone (the driver's pointed at another empty folder), then twice warm.
 # Each run's log says the adapter's time, the kernel's build, the pipeline cache's bytes, the
@@ -91,7 +91,7 @@ done
 rm -rf "$cold_cache" "$second_cache" "$HEXRAY_PIPELINE_CACHE"
 unset HEXRAY_PIPELINE_CACHE
 
-step "issue 7's goal: tncg15_room 800x800, 50 spp, path (after bench's 1-spp warm-up)"
+step "the first image's steady state: tncg15_room 800x800, 50 spp, path (after bench's 1-spp warm-up)"
 "$hexray" bench scenes/tncg15_room.json --backend gpu --width 800 --height 800 \
     --spp "${GOAL_SPP:-50}" --out "$out/bench_800.json" > "$out/bench_800.txt" 2>&1
 cat "$out/bench_800.txt"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The samplers side by side (issue 48): path tracing's relMSE against samples per pixel and
+# The samplers side by side: path tracing's relMSE against samples per pixel and
 # against render time, independent against sobol, on the three reference scenes at 256x256 on the
 # CPU, and what a Sobol point costs (camera paths/s on the CPU and on the GPU adapter).
 #

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CPU camera paths per second, hexray's path tracer against Mitsuba 3's `path` (llvm_ad_rgb), side
 # by side in one run, alternating (these machines drift by tens of percent between hours, so only
-# a ratio measured this way counts; issue 17).
+# a ratio measured this way counts).
 #
 #   benches/speed_vs_mitsuba.sh [SCENE_NAME ...]   (default: tncg15_room cornell_box glass_room)
 #   benches/speed_vs_mitsuba.sh tncg15_room bunny_room perf/bunny_room_1m   # the mesh scenes

@@ -1,5 +1,5 @@
 //! How busy SIMD lanes stay when a GPU runs `shaders/path.wgsl` in lockstep: a measurement of
-//! the work itself, not of a clock (issue 17: why the GPU backend trails the CPU on lavapipe).
+//! the work itself, not of a clock (where lavapipe's SIMD lanes idle).
 //!
 //! ```sh
 //! cargo run --release --features counters --example lane_occupancy [LANES] [SCENE.json ...]

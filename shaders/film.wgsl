@@ -61,7 +61,7 @@ fn band_index(index: u32) -> u32 {
 // iteration's image sum (64 invocations of an 8 x 8 workgroup).
 var<workgroup> image_partial: array<vec3<f32>, 64>;
 
-// Light tracing and BDPT, after an iteration's light and camera passes: one invocation per pixel
+// The light-subpath methods, after an iteration's light and camera passes: one invocation per pixel
 // of the tile. The pixel's value for the iteration, its camera subpath's radiance (BDPT; none for
 // light tracing) plus the splats it received, is one sample of the pixel, and goes into the
 // iteration's image sum (batch means, src/film/mod.rs). If a wave of the iteration overflowed the

@@ -174,7 +174,7 @@ fn render_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
     // One loop of bounces instead, where a lane whose path ended starts its pixel's next
     // sample at once: measured with `examples/lane_occupancy.rs`, 16 samples a lane keep 85 %
     // of 8 lanes busy bounce by bounce where one sample at a time keeps 56 %. Each sample is
-    // the same path as before (its own streams) and is added in sample order.
+    // the path a loop over samples would trace (its own streams), added in sample order.
     var s = first;
     var sampler = frame_sampler(index, s);
     var path = start_path(x, y, sampler);

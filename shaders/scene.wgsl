@@ -188,7 +188,7 @@ const F32_MAX: f32 = 3.40282347e38;
 const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 
 // The scene arrays (bindings 0 to 5) are declared in bindings_storage.wgsl or
-// bindings_uniform.wgsl; the host chooses one (see `Residency` in src/gpu/renderer/mod.rs).
+// bindings_uniform.wgsl; the host chooses one (`Residency::preferred` in src/gpu/limits.rs).
 @group(0) @binding(6) var<uniform> frame: Frame;
 @group(0) @binding(7) var<storage, read_write> pixel_sums: array<PixelSums>;
 // Adaptive sampling's runs of the pass (`PixelRun`): a pixel's index, its first sample and how

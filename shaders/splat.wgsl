@@ -18,7 +18,7 @@ const CELL_WORDS: u32 = 8u;
 const CELL_OVERFLOW: u32 = 6u;
 // The image cell's last word: the most light vertices any wave of the iteration asked for.
 const CELL_VERTICES: u32 = 7u;
-// Iterations per pass (`MAX_PASS_SPP` in src/gpu/renderer/mod.rs).
+// Iterations per pass (`MAX_PASS_SPP` in src/gpu/frame.rs).
 const MAX_PASS_SPP: u32 = 64u;
 
 // Pixels the band's splat cells cover.

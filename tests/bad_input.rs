@@ -177,8 +177,8 @@ fn cases() -> Vec<Case> {
             message: "missing field `eye`",
             on_line: None,
         },
-        // Values valid in f64 that the renderer, in f32, could not carry (issue 16): each
-        // used to pass validation and panic, or drop every sample with exit 0.
+        // Values valid in f64 that the renderer, in f32, cannot carry: each must be refused
+        // with its path (else it would panic, or drop every sample with exit 0).
         Case {
             name: "radiance that is 0 in f32",
             base: ROOM,
@@ -491,7 +491,7 @@ fn radiance_beyond_the_splat_range_is_refused_for_the_splatting_methods_only() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
-/// Parser gaps (issue 16): what serde accepted silently is refused through the CLI as any other
+/// Parser gaps: what serde would accept silently is refused through the CLI as any other
 /// bad scene, exit 2 and `FILE:LINE:COL: PATH: message` with a help line.
 #[test]
 fn trailing_content_duplicates_and_positional_arrays_are_refused_with_a_location() {

@@ -133,10 +133,9 @@ impl Drop for KillOnDrop {
 
 /// Ctrl-C once the render has samples: it ends after the current pass, writes every sample
 /// taken, and exits 130. The test waits for the render's first checkpoint (written after two
-/// seconds of rendering) rather than a fixed time: start-up differs by machine. On an NVIDIA
-/// H100 (2026-11-26), which `--backend auto` takes, a signal at a fixed 1.5 s found the render
-/// still starting (driver, kernel builds) with no sample taken, so, rightly, nothing was
-/// written. The checkpoint's files are then removed before the signal, so the files read
+/// seconds of rendering) rather than a fixed time: start-up (the driver, the kernel's build)
+/// differs by machine, and a stop before the first sample rightly writes nothing (on an NVIDIA
+/// H100 a fixed 1.5 s came before it). The checkpoint's files are then removed before the signal, so the files read
 /// afterwards are those written on it (or by a later checkpoint before it, which would also
 /// hold the samples).
 #[cfg(unix)]
@@ -278,7 +277,7 @@ fn gpu_backend_renders_and_records_its_adapter() {
 
 /// A GPU render says apart what a session pays once: the adapter and device, the kernel's
 /// build, and its first pass (where a driver that compiles at the first dispatch compiles),
-/// then the rate of the passes after it (issue 46's first-image times).
+/// then the rate of the passes after it.
 #[test]
 fn a_gpu_render_reports_its_start_up_and_first_pass_apart() {
     if crate::common::gpu().is_none() {

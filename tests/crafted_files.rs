@@ -1,5 +1,5 @@
-//! Files that `compare`, `merge` and `--resume` read are checked before they are trusted
-//! (issue 16): a header that claims more pixels than its file holds is refused before any
+//! Files that `compare`, `merge` and `--resume` read are checked before they are trusted: a
+//! header that claims more pixels than its file holds is refused before any
 //! allocation, and merge refuses, by file and pixel, what would poison its sums silently.
 
 use crate::common::temp_dir;

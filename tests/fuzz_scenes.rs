@@ -1,4 +1,4 @@
-//! Fuzzing the scene loader (issue 16): mutated copies of the repository's scenes go through
+//! Fuzzing the scene loader: mutated copies of the repository's scenes go through
 //! UTF-8 decoding, parsing and validation (`Scene::decode`, `Scene::parse`), and scenes that
 //! pass are flattened for rendering. Nothing may panic, and every refusal must be located: a
 //! 1-based line and column inside the file, a message and a help line.

@@ -101,7 +101,7 @@ fn gpu_matches_cpu_on_cornell_box() {
 
 /// relMSE of the GPU's path-traced image against the CPU's with the same seed, so the same
 /// random streams: `SAME_SPP` samples are one pass, which each lane runs as one loop of bounces,
-/// starting its pixel's next sample as soon as a path ends (path regeneration, `render` in
+/// starting its pixel's next sample as soon as a path ends (path regeneration, `render_pass` in
 /// `shaders/path.wgsl`), over dispatches of 16 of the 64 rows.
 fn same_streams(rel: &str, gpu_faults: Faults) -> Option<f64> {
     const SAME_SPP: u32 = 64;

@@ -95,9 +95,8 @@ on_each_backend! {
     }
 }
 
-/// Power: a cornell box whose walls reflect 2 % less (albedo x 0.98 through the dim-mirror
-/// fault is not available for diffuse walls, so the planted error is a render with another
-/// scene's light: the ratio test must reject a 2 % darker image).
+/// Power: the same render scaled by 0.98 (no fault dims diffuse walls, so the planted error is
+/// a 2 % darker image) must be rejected by the ratio test.
 #[test]
 fn mitsuba_comparison_rejects_a_2_percent_darker_image() {
     let film = cornell_box(Backend::Cpu);

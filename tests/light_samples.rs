@@ -109,9 +109,8 @@ fn gpu_matches_cpu_with_three_shadow_rays() {
     }
 }
 
-/// With one shadow ray the integrator draws exactly the numbers it drew before extra shadow
-/// rays existed: the default render is unchanged bit for bit by the feature (the extra rays use
-/// dimension blocks of their own).
+/// With one shadow ray the integrator draws no numbers from the extra rays' dimension blocks:
+/// the default render is bit for bit the single-light-sample render.
 #[test]
 fn one_shadow_ray_draws_no_extra_numbers() {
     use hexray::math::sampling::{dim_bsdf, dim_light, dim_light_extra};

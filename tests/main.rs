@@ -1,6 +1,6 @@
 //! The integration tests, one module per property file (`tests/<property>.rs`), built as one
 //! test executable: each executable is a full link of the renderer and wgpu (with the release
-//! profile's LTO, about half a minute each on 2 cores), so one binary instead of twenty keeps
+//! profile's LTO, about half a minute each on 2 cores), so one binary instead of one per file keeps
 //! `cargo test --release` quick. Run one file's tests with a filter: `cargo test --release furnace::`.
 
 mod adaptive;

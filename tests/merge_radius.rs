@@ -38,8 +38,8 @@ fn iterations(
     }
 }
 
-/// The radius that vcm took before it followed the view: 0.03 of the scene's bounding-sphere
-/// radius at every vertex.
+/// A scene-bound radius, the baseline the view's radius is compared with: 0.03 of the scene's
+/// bounding-sphere radius at every vertex.
 fn scene_bound_radius(scene: &Scene) -> MergeRadius {
     let flat = hexray::layout::FlatScene::build(scene);
     MergeRadius::uniform(0.03 * scene_radius(&flat), DEFAULT_ALPHA)

@@ -641,7 +641,7 @@ fn degenerate_mesh_triangles_are_dropped_counted_and_reported() {
         stderr.contains("dropped 1 triangles of zero area in f32"),
         "{stderr}"
     );
-    // The log gives the BVH's build time (the figure for 10^6 triangles is read there).
+    // The log gives the BVH's build time.
     assert!(
         stderr.contains("hexray: BVH of 29 primitives built in "),
         "{stderr}"
@@ -831,7 +831,7 @@ fn the_scene_sha1_covers_the_scene_file_and_each_mesh_file() {
     )
     .unwrap();
     assert_ne!(Scene::load(&path).unwrap().sha1, first);
-    // Without meshes it is the scene file's own, as before meshes existed.
+    // Without meshes it is the SHA-1 of the scene file alone.
     let bare = std::fs::read(repo(ROOM)).unwrap();
     assert_eq!(
         Scene::load(&repo(ROOM)).unwrap().sha1,

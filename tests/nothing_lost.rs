@@ -1,4 +1,4 @@
-//! Work is never lost (issue 16): a stop by any of the usual signals keeps the samples and
+//! Work is never lost: a stop by any of the usual signals keeps the samples and
 //! exits with 128 + the signal; a stop before the first sample writes nothing; a render can be
 //! resumed bit for bit from the film written beside it, and only from its own; checkpoints
 //! survive a kill without warning.
@@ -324,7 +324,7 @@ fn checkpoints_survive_a_kill_without_warning_and_resume() {
 
 /// A render stopped without warning between writing its EXR and its film leaves the pair one
 /// checkpoint apart (the EXR newer); resuming takes the film, which holds the samples, and
-/// goes on (before, the pair was refused as two renders, and the samples were stranded).
+/// goes on rather than refusing the pair as two renders.
 #[test]
 fn a_pair_cut_between_its_writes_resumes_from_the_film() {
     let dir = temp_dir!("cut-pair");

@@ -211,9 +211,9 @@ fn converges(scene: &str, reference: &str, method: Method, n: u32) {
 
 /// The caustic scene (a glass sphere focusing a small light onto the floor). Measured with the
 /// default radius schedule on 32x32: sppm 4.4e-2 → 1.6e-2 at 128 → 512 iterations and vcm
-/// 1.9e-3 → 4.9e-4 at 256 → 1024 (at the earlier default of 0.003 of the scene radius, sppm
-/// 0.80 → 0.24 → 0.094 and vcm 2.5e-2 → 3.6e-3 → 1.1e-3 at 64, 256, 1024). VCM starts at 256:
-/// at 0.003, below that its error was a few rare bright merges (heavy-tailed), and one seed's
+/// 1.9e-3 → 4.9e-4 at 256 → 1024 (at 0.003 of the scene radius, sppm 0.80 → 0.24 → 0.094 and
+/// vcm 2.5e-2 → 3.6e-3 → 1.1e-3 at 64, 256, 1024). VCM starts at 256: at 0.003 of the scene
+/// radius its error below that was a few rare bright merges (heavy-tailed), and one seed's
 /// 128 → 512 fell only to 0.50x.
 #[test]
 fn sppm_converges_on_the_caustic() {
@@ -342,7 +342,7 @@ fn gpu_vcm_matches_cpu_on_glass_room() {
 /// | 0.03, glass_room | 55 | | 37 (largest term 3.899e-3) |
 ///
 /// So these checks run every method at 0.01 ([`same_streams`]), the radius of the first
-/// table's counts. At vcm's default of 0.03 the H100 flipped 49 pixels on tncg15_room and 55 on
+/// table's counts. At 0.03 of the scene radius the H100 flipped 49 pixels on tncg15_room and 55 on
 /// glass_room (2026-11-28, docs/records/2026-11-28_gpu/; on glass_room with the same largest term,
 /// 3.899e-3, as the CPU's fused hit point), beyond this allowance, with nothing wrong found in
 /// its clearance: the clearance moves only with the hit point, and it shrinks the disk, so vcm
@@ -519,10 +519,9 @@ fn the_bit_for_bit_check_rejects_another_seed() {
 /// once, so a pool of 3000 vertices (64x64 pixels store about 18 000 on tncg15_room: six or
 /// more waves) renders what the CPU renders on the same streams, to f32 rounding (the merges
 /// are summed in another order) but for the few flipped decisions allowed above (measured in
-/// the table there). Planted by hand in the shader on 2026-11-24 against the relMSE bound of
-/// that day, both rejected: merging only in the pixel's own wave (relMSE 2.9e-1 for sppm,
-/// 4.5e-3 for vcm), and taking the connections in every wave (3.0). The first planted again on
-/// 2026-11-26 against the pixel count, on lavapipe: 1911 (sppm) and 532 (vcm) pixels differ.
+/// the table there). Planted by hand in the shader, both are rejected: merging only in the
+/// pixel's own wave (on lavapipe 1911 (sppm) and 532 (vcm) pixels beyond the allowance), and
+/// taking the connections in every wave (relMSE 3.0).
 /// With `light_paths` N below the pixels, pixel j connects to light subpath j mod N in that
 /// subpath's wave.
 fn same_streams_in_waves(method: Method, light_paths: Option<u32>) -> Option<usize> {

@@ -1,4 +1,4 @@
-//! The scene parser refuses what it cannot read unambiguously (issue 16, "parser gaps"):
+//! The scene parser refuses what it cannot read unambiguously:
 //! trailing content, duplicate keys and material names, structs written as positional arrays.
 //! Every error has a 1-based line:column in characters and the JSON path, worded
 //! `FILE:LINE:COL: PATH: message` with a `help:` line. A UTF-8 byte order mark is accepted.
@@ -286,7 +286,7 @@ fn an_error_in_a_material_field_points_at_the_field() {
         .remove("type");
     let e = refused(&serde_json::to_string_pretty(&v).unwrap());
     assert!(e.message.contains("missing field `type`"), "{e}");
-    // The kinds still read as before.
+    // The unmodified room's material kinds still read.
     let scene = parse(&room_text()).unwrap();
     assert!(matches!(
         scene.desc.materials["light"],

@@ -1,6 +1,6 @@
-//! A ray tangent to a mirror sphere: the grazing hit where the bidirectional methods' MIS
-//! quantities divided by a cosine whose square is 0 in f32 (found in glass_room, vcm, seed 3:
-//! one NaN sample in ten million, a camera subpath tangent to a sphere at cos θ = 0).
+//! A ray tangent to a mirror sphere: a grazing hit whose cosine squared is 0 in f32, where the
+//! bidirectional methods' MIS quantities would divide by zero (glass_room, vcm, seed 3 meets one
+//! in ten million samples: a camera subpath tangent to a sphere at cos θ = 0).
 //!
 //! `scenes/stability/grazing.json` (a closed enclosure whose upper half emits) with a mirror
 //! sphere of radius 0.5 centred at (2, 0, 1.25), seen from (0, 0, 1.75) along +x with a field of

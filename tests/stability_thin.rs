@@ -13,27 +13,22 @@
 //!
 //! Known leak (a finding, not hidden): at 4096 spp (16.8 M samples per view, seed 54) the CPU
 //! backend lights 1 pixel of the corner view and 1 of the edge view (2 samples in 33.6 M, 0.06
-//! per million). It lit 8 + 5 (0.39 per million) before rays were spawned from a hit point
-//! pulled into its triangle (`geometry::triangle_hit_point`). Replaying the leaks of the code
-//! before that, 2 of 8 were rays through the shared diagonal of two coplanar triangles (a
-//! shadow ray through the top face at (0.99299, 0.99299, 2), one through the +y wall), which
-//! Möller–Trumbore's edge tests, rounded differently in the two triangles, both reject; 6 were
-//! hits on an edge where two faces meet at 90 degrees, whose computed point lay on or one ulp
-//! beyond the adjacent face's plane (e.g. (1.0000001, −0.457, 1e-4) on the bottom face), so that
-//! the spawned ray, offset along the hit face's normal only, started outside the adjacent face
-//! and left through it (that face's hit at t ≈ 0 was below its error bound). The pulled-in hit
-//! point closes the second kind; the two left are presumably of the first (a pull-in margin four
-//! times as wide leaves the same 1 + 1: not a matter of the margin). pbrt-v4's watertight
-//! triangle test, which closes the first kind, was tried on both backends with the pulled-in
-//! point (2026-11-23) and leaked 196 + 261 pixels: its bound on t's rounding error (about
-//! 80 eps times the vertices' distance from the ray origin, against Möller–Trumbore's bound
-//! near gamma(7) times the same products) rejects the adjacent face's genuine hit at t of the
-//! order of the pull-in distance, so rays near a 90-degree edge leave through it. At 64 spp the
-//! expected number of leaks in this test is about 0.03, so it passes with probability about
-//! 0.97 whatever the seed; it has power against leaks of 10 or more per million (P(miss) <
-//! 1 %), and `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails today;
-//! 30 s) states the property at the rate where it fails. (The issue's own statistic, the
-//! region's mean within 4 s.e. of 0, holds even there.)
+//! per million), presumably rays through the shared diagonal of two coplanar triangles, which
+//! Möller–Trumbore's edge tests, rounded differently in the two triangles, both reject (a
+//! pull-in margin four times as wide leaves the same 1 + 1). The other kind, a hit on an edge
+//! where two faces meet at 90 degrees whose computed point lies one ulp beyond the adjacent
+//! face's plane, is closed by spawning rays from a hit point pulled into its triangle
+//! (`geometry::triangle_hit_point`); without it the rate is 0.39 per million. pbrt-v4's
+//! watertight triangle test, which closes the first kind, leaks 196 + 261 pixels here even with
+//! the pulled-in point: its bound on t's rounding error (about 80 eps times the vertices'
+//! distance from the ray origin, against Möller–Trumbore's bound near gamma(7) times the same
+//! products) rejects the adjacent face's genuine hit at t of the order of the pull-in distance,
+//! so rays near a 90-degree edge leave through it. At 64 spp the expected number of leaks in
+//! this test is about 0.03, so it passes with probability about 0.97 whatever the seed; it has
+//! power against leaks of 10 or more per million (P(miss) < 1 %), and
+//! `thin_closed_box_is_black_inside_at_16_million_samples` (ignored: it fails at that rate;
+//! 30 s) states the property at the rate where it fails. (A weaker statistic, the region's mean
+//! within 4 s.e. of 0, holds even there.)
 //!
 //! (b) A glass slab (ior 1.5, tint 1) 1e-4 thick in front of a uniform emitter Le = 1 that fills
 //! the view: with incoherent internal reflections the model transmits exactly

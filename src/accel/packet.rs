@@ -41,8 +41,8 @@ pub const PACKET: usize = 8;
 /// Trees of more four-wide nodes than this are large: there a packet's closest-hit traversal
 /// visits children nearest first, and rays go on alone below a node that few of them enter. In
 /// a small tree a packet's rays stay coherent down to the leaves, and both cost more than they
-/// save: with them the three reference rooms (7 – 13 nodes) ran at 0.94 – 0.97x the camera paths/s;
-/// with them on large trees only, bunny_room (1 699 nodes) and bunny_room_1m run at 1.40x and
+/// save: with them the three reference rooms (a few nodes each) ran at 0.94 – 0.97x the camera
+/// paths/s; with them on large trees only, bunny_room and bunny_room_1m run at 1.40x and
 /// 1.35x, the rooms level (docs/journal/2026-11-29_meshes.md).
 pub const LARGE_TREE_NODES: usize = 64;
 

@@ -82,7 +82,7 @@ fn looks(names: &[&str]) -> Vec<Look> {
 fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        // The bytes are a valid TrueType font, checked by `charts_decode_as_images`.
+        // The bytes are a valid TrueType font, checked by `curve_relmse_falls_with_spp_and_its_charts_decode` (tests/curve.rs).
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
     });
 }

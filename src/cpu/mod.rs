@@ -371,7 +371,7 @@ impl LightPassBuffers {
 /// (pixel index mod N) and merge with every light subpath's vertices; each pixel's value for
 /// the iteration, the mean of its camera subpaths' radiance plus the splats it received, is one
 /// sample of that pixel, and the iteration's image mean one sample of the image mean (batch
-/// means, `film.rs`). Splat sums do not depend on thread order, so images are bit-identical for
+/// means, `crate::film::Film`). Splat sums do not depend on thread order, so images are bit-identical for
 /// any thread count. Returns the number of rays traced.
 #[allow(clippy::too_many_arguments)]
 pub fn render_iterations(

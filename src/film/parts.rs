@@ -3,7 +3,7 @@
 //! rendered which part.
 //!
 //! Each part carries per pixel its mean m_i over n_i samples and the variance of that mean v_i
-//! (`NAME_var.exr`, from Σx² as in `film.rs`). The sums are recovered exactly in f64,
+//! (`NAME_var.exr`, from Σx² as in `crate::film`). The sums are recovered exactly in f64,
 //! Σx = n_i m_i and Σx² = n_i (n_i − 1) v_i + n_i m_i², added over parts, and the merged mean
 //! and variance of the mean follow from the totals by the film's own formulas: the merge is
 //! the render that took all the parts' samples. The parts are summed in seed order, so the file

@@ -1,4 +1,4 @@
-//! The GPU's light tracing and BDPT: the host side of `shaders/light_path.wgsl`,
+//! The GPU's light-subpath methods (light, bdpt, sppm, vcm, vcm-full, photon-map): the host side of `shaders/light_path.wgsl`,
 //! `shaders/bdpt.wgsl` and the resolve pass of `shaders/film.wgsl`.
 //!
 //! Each iteration is a sequence of dispatches over the same buffers, as on the CPU

@@ -11,7 +11,7 @@ use bytemuck::{Pod, Zeroable};
 
 /// One dispatch's parameters (`Frame` in `shaders/scene.wgsl`): the camera, which samples of
 /// which tile, the method and its light pass, the film band, the test-only faults, and the
-/// scene's planar mirrors (`planar_mirror`). Twenty-four vec4s.
+/// scene's planar mirrors (`planar_mirror`). A whole number of vec4s (`tests/layout.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Frame {

@@ -65,7 +65,7 @@ pub(super) fn largest_binding(limits: &wgpu::Limits) -> u64 {
 /// binding; if not, a sentence for the user. The per-pixel buffers are cut into film bands of
 /// whole rows (path tracing: `GpuRenderer::film_rows`; the methods that splat: the band of
 /// their tallies, `bidirectional::splat_band_rows`), so any image whose single row fits
-/// renders: on lavapipe's 128 MiB, rows of up to 3.7 million pixels.
+/// renders: on lavapipe's 128 MiB, rows of up to 2.8 million pixels (48 bytes each).
 pub fn check_image_fits(
     limits: &wgpu::Limits,
     method: Method,

@@ -32,8 +32,8 @@ pub const PRIM_PADDING: u32 = u32::MAX;
 
 /// A triangle: vertices as given (the winding fixes an emitter's front), its material, its row
 /// in the emitter table, the planar mirror it belongs to, and its unit normal, computed once
-/// here rather than at every hit (a cross product and a square root that sat on every path
-/// vertex's critical path). Four vec4s.
+/// here rather than at every hit (a cross product and a square root that would sit on every
+/// path vertex's critical path). Four vec4s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
 pub struct Triangle {

@@ -54,7 +54,7 @@ pub fn dim_bsdf(bounce: u32) -> u32 {
 }
 /// Shadow rays beyond the first (`--light-samples`): block of light sample `j` in 1..256 at
 /// bounce `k`, in the upper half of the block space, so that one light sample per vertex draws
-/// exactly the numbers it always did. (Blocks would collide only past 2^22 bounces, which
+/// the same numbers as a render without `--light-samples`. (Blocks would collide only past 2^22 bounces, which
 /// Russian roulette with survival ≤ 0.95 makes a probability below 10^-50000.)
 #[inline]
 pub fn dim_light_extra(bounce: u32, j: u32) -> u32 {
@@ -119,7 +119,7 @@ pub const MAX_LIGHT_SAMPLES: u32 = 256;
 ///
 ///   The samples of a pixel are two independent randomisations of the sequence, interleaved:
 ///   sample `i` is point `i / 2` of stream `i % 2`. Their means are independent estimates, which
-///   is what the film's standard errors need (`Film::pixel_var_of_mean`): the samples within a
+///   is what the film's standard errors need (`PixelStats::var_of_mean_from_streams`): the samples within a
 ///   stream are not independent, and their sample variance does not measure the mean's error.
 #[derive(
     Clone,

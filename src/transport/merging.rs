@@ -46,21 +46,20 @@ use glam::Vec3;
 /// k for `vcm` (which merges within each vertex's clearance, [`local_radius`]), one radius at
 /// every vertex: 0.031, a disk 0.0155 of the view's height at the view's reach (the height is
 /// 2 tan(θ/2) T). On the reference scenes at 256x256 in 30 s on the CPU, seeds 21 – 24 in one
-/// run, vcm's relMSE (the references' noise subtracted) was 0.984, 0.982 and 0.922 of that at
-/// the default before the radius followed the view (0.03 of the scene's bounding-sphere radius)
-/// on tncg15_room, glass_room and cornell_box; a share by distance, r_i · min(t / T, 1) at
+/// run, vcm's relMSE (the references' noise subtracted) was 0.984, 0.982 and 0.922 of that at a
+/// radius of 0.03 of the scene's bounding-sphere radius on tncg15_room, glass_room and cornell_box; a share by distance, r_i · min(t / T, 1) at
 /// k = 0.036, gave 1.062, 0.982 and 0.802 (docs/journal/2026-11-28_view_radius.md): the room
 /// wants a wide disk near the camera. Where surfaces meet, a disk that reaches across the edge
 /// counts the photons of the wrong surface and misses the light behind it; within the clearance
 /// that bias is gone, and the flat walls bear a wide disk (docs/journal/2026-11-27_clearance.md).
 pub const VCM_VIEW_SHARE: f32 = 0.031;
 
-/// k for `sppm` and `vcm-full`: 0.012, a third of the 0.036 that vcm's share by distance took,
-/// as 0.01 of the scene radius was a third of vcm's 0.03 when the radius was a share of the
-/// scene's bounds. Their disks do not stop at the clearance, and SPPM's relMSE at 0.01 of the
-/// scene radius was 0.13 – 0.16 of 0.003's (CPU, 256x256, 30 s;
+/// k for `sppm` and `vcm-full`: 0.012, a third of vcm's share by distance (0.036), since their
+/// disks do not stop at the clearance (with radii as shares of the scene's bounding sphere,
+/// SPPM's relMSE at 0.01 was 0.13 – 0.16 of that at 0.003: CPU, 256x256, 30 s;
 /// docs/journal/2026-11-27_merge_radius.md). SPPM's relMSE at 30 s, seeds 21 and 22, was 1.075,
-/// 1.001 and 1.093 of the scene-bound radius's on the three reference scenes: not tuned yet.
+/// 1.001 and 1.093 of that at 0.01 of the scene radius on the three reference scenes; k is not
+/// tuned further.
 pub const DEFAULT_VIEW_SHARE: f32 = 0.012;
 
 /// k for `photon-map`, whose radius is the same at every vertex and every iteration: 0.012, as
@@ -294,7 +293,7 @@ pub fn footprint_share(t: f32, reach: f32) -> f32 {
 /// Within its clearance the disk lies on the vertex's own plane in front of every other surface,
 /// so the merge is free of the bias where surfaces meet (the room's edges, an emitter's outline,
 /// what stands on the floor), which held most of merging's bias (see [`VCM_VIEW_SHARE`]). The
-/// schedule still shrinks it over iterations: consistent as before.
+/// schedule shrinks it over iterations, so the estimate stays consistent.
 pub fn local_radius(scene: &FlatScene, p: Vec3, prim: u32, radius: f32) -> f32 {
     crate::transport::clearance::clearance(scene, p, prim, radius).max(CLEARANCE_FLOOR * radius)
 }

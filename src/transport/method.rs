@@ -68,10 +68,8 @@ impl Method {
     /// path tracing, of Whitted and of radiosity (whose samples cost less; radiosity's solve comes
     /// once, before them); 8 of the methods that trace a light subpath and a camera subpath per pixel
     /// and iteration, which cost 3-9x a path-traced sample (`hexray bench`; VCM's merges cost
-    /// more as the image grows, since every pixel adds a photon). vcm took 20 while its radius
-    /// was 0.01 of the scene's; within the clearance at 0.03 its merges gather nine times the
-    /// photons (on 2 cores of an Intel Xeon VM, 2026-11-27 evening: 64 spp of path in 6.28 s,
-    /// 20 iterations of vcm in 17.1 s, 7 in 6.3 s).
+    /// more as the image grows, since every pixel adds a photon; on 2 cores of an Intel Xeon VM,
+    /// 64 spp of path took 6.28 s and 7 iterations of vcm 6.3 s).
     pub fn default_samples(self) -> u32 {
         match self {
             Method::Path | Method::Whitted | Method::Radiosity => 64,
@@ -103,7 +101,7 @@ impl Method {
 
     /// Whether the method traces light subpaths that every pixel of an iteration may use
     /// (splatted or merged), so that an iteration's pixels share samples and its statistics
-    /// are batch means (`film.rs`).
+    /// are batch means (`crate::film::Film`).
     pub fn splats(self) -> bool {
         !matches!(self, Method::Path | Method::Whitted | Method::Radiosity)
     }

@@ -78,7 +78,7 @@ impl GpuRenderer {
         v
     }
 
-    /// One pass of light tracing or BDPT: iterations `first..first + count` (at most
+    /// One pass of a light-subpath method: iterations `first..first + count` (at most
     /// MAX_PASS_SPP), and again those whose waves overflowed the vertex pool, until every one
     /// has landed in the film; false if `stop` cut it short (the run under way is not folded).
     pub(super) fn pass_bidirectional(

@@ -40,7 +40,7 @@ pub enum Checks {
 pub struct GpuRenderer {
     pub(super) device: wgpu::Device,
     pub(super) queue: wgpu::Queue,
-    /// Path tracing's kernel (None for light tracing and BDPT).
+    /// The pass kernel of path tracing, whitted and radiosity (None for the light-subpath methods).
     pipeline: Option<wgpu::ComputePipeline>,
     pub(super) bind_group: wgpu::BindGroup,
     pub(super) frame_buffer: wgpu::Buffer,
@@ -56,7 +56,7 @@ pub struct GpuRenderer {
     pub(super) film_rows: u32,
     pub(super) frame: Frame,
     pub(super) method: Method,
-    /// Light tracing and BDPT: their kernels and buffers.
+    /// The light-subpath methods: their kernels and buffers.
     pub(super) bidirectional: Option<Bidirectional>,
     /// Radiosity: its solve kernels and, once solved, its buffers (bind group 1 of its pass).
     pub(super) radiosity: Option<Radiosity>,
