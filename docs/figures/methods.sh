@@ -57,6 +57,14 @@ references() {
     done
 }
 
+# Writes the commit (git describe --dirty) to FILE, described before the file is written:
+# writing it first would mark the tree dirty.
+stamp() {
+    local commit
+    commit=$(git describe --always --dirty 2> /dev/null || true)
+    echo "$commit" > "$1"
+}
+
 have_mitsuba() {
     [ -x "$mitsuba_python" ] && "$mitsuba_python" -c 'import mitsuba' 2> /dev/null
 }
@@ -94,10 +102,7 @@ run() {
     local backends=cpu
     have_gpu && backends=cpu,gpu
     mkdir -p "$out"
-    # Described before the file is written: writing it first would mark the tree dirty.
-    local commit
-    commit=$(git describe --always --dirty 2> /dev/null || true)
-    echo "$commit" > "$out/commit.txt"
+    stamp "$out/commit.txt"
     scene_list | while read -r name scene ref size; do
         [ -f "$ref" ] || { echo "missing $ref: run docs/figures/methods.sh references first" >&2; exit 1; }
         local dir=$out/$name
@@ -155,9 +160,7 @@ readme() {
             > "$out/readme_$which.json"
         grep '^rendered' "out/methods/readme_$which.log" > "$out/readme_$which.txt"
     done
-    local commit
-    commit=$(git describe --always --dirty 2> /dev/null || true)
-    echo "$commit" > "$out/readme_commit.txt"
+    stamp "$out/readme_commit.txt"
     cp out/methods/readme_default.png docs/figures/tncg15_room.png
     cp out/methods/readme_path.png "$out/tncg15_room_512_path_64spp.png"
 }

@@ -84,8 +84,8 @@ pub(crate) struct RenderArgs {
     /// radius).
     #[arg(long, value_parser = parse_alpha)]
     pub(crate) alpha: Option<f32>,
-    /// Light subpaths per iteration N of every method but path, whitted and radiosity, at most one per pixel
-    /// (more are cut to that): photon-map's photon paths. Default: one per pixel, up to 262144
+    /// Light subpaths per iteration N of every method but path, whitted and radiosity, at most
+    /// one per pixel (more are cut to that): photon-map's photon paths. Default: one per pixel, up to 262144
     /// (512x512) for sppm, vcm, vcm-full and photon-map
     /// and 1048576 for light and bdpt; beyond, the camera subpaths share them (pixel index mod
     /// N), so an iteration's cost grows as its pixels.
@@ -203,20 +203,21 @@ pub(crate) fn merge_radius_of(
 ) -> std::result::Result<hexray::transport::merging::MergeRadius, String> {
     if !method.merges() && (radius.is_some() || alpha.is_some()) {
         return Err(format!(
-            "--radius and --alpha are for --method sppm, vcm, vcm-full and photon-map (--radius \
-             only), not {method}"
+            "--radius is for --method {} and --alpha for {}, not {method}",
+            Method::names_where(Method::merges),
+            Method::names_where(Method::progressive)
         ));
     }
     if !method.progressive() && alpha.is_some() {
         return Err(format!(
-            "--alpha is for the progressive methods (sppm, vcm, vcm-full); {method}'s radius is \
-             fixed"
+            "--alpha is for the progressive methods ({}); {method}'s radius is fixed",
+            Method::names_where(Method::progressive)
         ));
     }
     if !method.splats() && light_paths.is_some() {
         return Err(format!(
-            "--light-paths is for the methods that trace light subpaths (light, bdpt, sppm, vcm, \
-             vcm-full, photon-map), not {method}"
+            "--light-paths is for the methods that trace light subpaths ({}), not {method}",
+            Method::names_where(Method::splats)
         ));
     }
     let mut r = hexray::transport::merging::MergeRadius::default_for(flat, camera, method);

@@ -99,6 +99,18 @@ impl Method {
             .find(|m| m.name() == name)
     }
 
+    /// The names of the methods with `property`, comma-separated, in `--method`'s order: for
+    /// messages that name which methods an option is for.
+    pub fn names_where(property: impl Fn(Method) -> bool) -> String {
+        let names: Vec<&str> = Method::value_variants()
+            .iter()
+            .copied()
+            .filter(|&m| property(m))
+            .map(Method::name)
+            .collect();
+        names.join(", ")
+    }
+
     /// Whether the method traces light subpaths that every pixel of an iteration may use
     /// (splatted or merged), so that an iteration's pixels share samples and its statistics
     /// are batch means (`crate::film::Film`).
