@@ -63,7 +63,7 @@ fn main() {
     println!("                 a lane");
     for path in &args {
         let scene = common::load(path);
-        let mut flat = FlatScene::build(&scene);
+        let mut flat = FlatScene::build(&scene, hexray::gpu::GpuRenderer::TRAVERSAL);
         // The shader traverses the four-wide tree: count its nodes, not the CPU's wide ones.
         flat.wide = hexray::accel::wide_bvh::one_for_one(&flat.nodes);
         let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);

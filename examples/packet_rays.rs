@@ -46,7 +46,7 @@ fn main() {
     println!("scene                four-wide nodes  closest: one  packet  ratio   shadow: one  packet  ratio");
     for path in &args {
         let scene = common::load(path);
-        let flat = FlatScene::build(&scene);
+        let flat = FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL);
         let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
         let (mut bounce, mut shadow) = (Vec::new(), Vec::new());
         for i in 0..SIZE * SIZE {

@@ -4,7 +4,7 @@
 //! primitives with the CPU's forms of it (triangle packs, the eight-wide tree), and the planar
 //! mirrors.
 
-use crate::accel::bvh;
+use crate::accel::bvh::{self, Traversal};
 use crate::layout::{
     sphere_area, triangle_area, BvhNode, Emitter, FlatScene, Material, Sphere, Triangle, WideNode,
     KIND_DIFFUSE, KIND_EMITTER, KIND_GLASS, KIND_MIRROR, PRIM_SPHERE_BIT,
@@ -18,8 +18,10 @@ fn f3(v: [f64; 3]) -> [f32; 3] {
 
 impl FlatScene {
     /// Flattens a validated scene: materials in name order, triangles (the listed triangles, then
-    /// the meshes' in `meshes` order, then the boxes' expanded), spheres, the emitter table, and the BVH over all primitives.
-    pub fn build(scene: &Scene) -> FlatScene {
+    /// the meshes' in `meshes` order, then the boxes' expanded), spheres, the emitter table, and
+    /// the BVH over all primitives, built for `traversal` (either backend renders any tree
+    /// right, another's only slower).
+    pub fn build(scene: &Scene, traversal: Traversal) -> FlatScene {
         let desc = &scene.desc;
         let names: Vec<&String> = desc.materials.keys().collect();
         let material_id = |name: &str| names.iter().position(|n| *n == name).unwrap() as u32;
@@ -96,7 +98,7 @@ impl FlatScene {
         let mut spheres = spheres;
         let emitters = build_emitter_table(&mut triangles, &mut spheres, &materials);
         let started = std::time::Instant::now();
-        let (nodes, prims, wide) = bvh::build_trees(&triangles, &spheres);
+        let (nodes, prims, wide) = bvh::build_trees(&triangles, &spheres, traversal);
         let bvh_seconds = started.elapsed().as_secs_f64();
         let planar_mirrors = planar_mirror::find(&mut triangles, &materials);
         FlatScene {

@@ -199,7 +199,7 @@ fn emitter_scene() -> FlatScene {
 fn scene_of(json: &str) -> FlatScene {
     let scene = Scene::from_json(json, std::path::Path::new("emitters.json"))
         .unwrap_or_else(|e| panic!("{e}"));
-    FlatScene::build(&scene)
+    FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL)
 }
 
 /// The solid-angle density with which `sample_emitter` produces direction w at point p: the

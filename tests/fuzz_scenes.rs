@@ -267,7 +267,7 @@ fn check_scene(bytes: &[u8]) -> Result<bool, TestCaseError> {
                 let scene = Scene::from_json(text, path).map_err(|e| {
                     TestCaseError::fail(format!("parse accepted but from_json refused: {e}"))
                 })?;
-                let flat = FlatScene::build(&scene);
+                let flat = FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL);
                 std::hint::black_box(&flat);
             }
             Ok(false)

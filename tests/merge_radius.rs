@@ -41,7 +41,7 @@ fn iterations(
 /// A scene-bound radius, the baseline the view's radius is compared with: 0.03 of the scene's
 /// bounding-sphere radius at every vertex.
 fn scene_bound_radius(scene: &Scene) -> MergeRadius {
-    let flat = hexray::layout::FlatScene::build(scene);
+    let flat = hexray::layout::FlatScene::build(scene, hexray::render::CpuBackend::TRAVERSAL);
     MergeRadius::uniform(0.03 * scene_radius(&flat), DEFAULT_ALPHA)
 }
 

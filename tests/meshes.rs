@@ -2,7 +2,8 @@
 //! for bit alike whichever file format or inline JSON carries them; a rotation puts the mesh
 //! where the closed form says; every defect of a mesh file is refused before rendering with its
 //! own located error and exit 2; the BVH over a 10^5-triangle mesh finds exactly what testing
-//! every triangle finds; and the GPU renders the bunny room as the CPU does.
+//! every triangle finds in either backend's tree; and the GPU renders the bunny room as the CPU
+//! does, and a mesh of over 4096 triangles in a tree of its own.
 
 use crate::common::temp_dir;
 use crate::common::*;
@@ -179,8 +180,14 @@ fn a_mesh_renders_bit_for_bit_alike_as_binary_ply_ascii_ply_obj_and_inline_trian
         .iter()
         .map(|p| Scene::load(p).unwrap_or_else(|e| panic!("{e}")))
         .collect();
-    let flats: Vec<FlatScene> = loaded.iter().map(FlatScene::build).collect();
-    let bare = FlatScene::build(&Scene::load(&repo(ROOM)).unwrap());
+    let flats: Vec<FlatScene> = loaded
+        .iter()
+        .map(|s| FlatScene::build(s, hexray::render::CpuBackend::TRAVERSAL))
+        .collect();
+    let bare = FlatScene::build(
+        &Scene::load(&repo(ROOM)).unwrap(),
+        hexray::render::CpuBackend::TRAVERSAL,
+    );
     assert_eq!(flats[0].triangles.len(), bare.triangles.len() + 6);
     let films: Vec<_> = loaded
         .iter()
@@ -657,10 +664,10 @@ fn info_describes_a_scene_and_refuses_a_bad_one_with_exit_2() {
     for want in [
         "triangles: 3700 (26 inline, 3674 from meshes, 0 from boxes)",
         "bounds: min [",
-        "bvh: ",
+        "bvh cpu: ",
+        "bvh gpu: ",
         "memory cpu: ",
         "memory gpu: ",
-        "bvh_build_seconds: ",
     ] {
         assert!(stdout.contains(want), "no `{want}` in\n{stdout}");
     }
@@ -707,12 +714,11 @@ fn cut_bunny(n: u32) -> Vec<Triangle> {
     out
 }
 
+/// Both backends' trees (`bvh::Traversal`).
 #[test]
 fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
     let tris = cut_bunny(6);
     assert!(tris.len() >= 100_000, "{} triangles", tris.len());
-    let (nodes, prims, wide) = bvh::build_trees(&tris, &[]);
-    let scene = FlatScene::from_tree(tris.clone(), Vec::new(), nodes, prims, wide);
     // A fixed generator of uniform numbers in [0, 1).
     let rnd = |i: u32, k: u32| {
         let mut x = (i as u64) << 32 | k as u64;
@@ -738,30 +744,47 @@ fn the_bvh_finds_what_brute_force_finds_on_a_mesh_of_10_5_triangles() {
             (Ray { o, d }, rnd(i, 7) * 1.2)
         })
         .collect();
-    let disagreements: Vec<String> = rays
+    // Testing every triangle: each ray's nearest hit, and whether its segment is blocked.
+    let truth: Vec<(f32, bool)> = rays
         .par_iter()
-        .enumerate()
-        .filter_map(|(i, (ray, t_max))| {
+        .map(|(ray, t_max)| {
             let hits: Vec<(f32, f32)> = tris
                 .iter()
                 .filter_map(|t| intersect_triangle(ray, t).map(|h| (h.t, h.t_err)))
                 .collect();
             let nearest = hits.iter().map(|h| h.0).fold(f32::INFINITY, f32::min);
-            let blocked = hits.iter().any(|&(t, e)| t < t_max - e);
+            (nearest, hits.iter().any(|&(t, e)| t < t_max - e))
+        })
+        .collect();
+    let hits = truth.iter().filter(|t| t.0.is_finite()).count();
+    assert!(hits >= 600, "only {hits} rays hit the mesh");
+    for traversal in [bvh::Traversal::Cpu, bvh::Traversal::Shader] {
+        let (nodes, prims, wide) = bvh::build_trees(&tris, &[], traversal);
+        let scene = FlatScene::from_tree(tris.clone(), Vec::new(), nodes, prims, wide);
+        assert_agrees(&scene, &rays, &truth, &format!("{traversal:?}"));
+    }
+}
+
+/// Every ray's nearest hit and shadow test in `scene` are `truth`'s.
+fn assert_agrees(scene: &FlatScene, rays: &[(Ray, f32)], truth: &[(f32, bool)], tree: &str) {
+    let disagreements: Vec<String> = rays
+        .par_iter()
+        .zip(truth)
+        .enumerate()
+        .filter_map(|(i, ((ray, t_max), &(nearest, blocked)))| {
             let got =
-                bvh::intersect_closest(&scene, ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
-            let got_blocked = bvh::occluded(&scene, ray, *t_max);
+                bvh::intersect_closest(scene, ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+            let got_blocked = bvh::occluded(scene, ray, *t_max);
             (got != nearest || got_blocked != blocked).then(|| {
                 format!("ray {i}: closest {got} vs {nearest}, occluded {got_blocked} vs {blocked}")
             })
         })
         .collect();
-    let hits = rays
-        .iter()
-        .filter(|(r, _)| bvh::intersect_closest(&scene, r, f32::INFINITY).is_some())
-        .count();
-    assert!(hits >= 600, "only {hits} rays hit the mesh");
-    assert!(disagreements.is_empty(), "{}", disagreements.join("\n"));
+    assert!(
+        disagreements.is_empty(),
+        "{tree}: {}",
+        disagreements.join("\n")
+    );
 }
 
 #[test]
@@ -779,6 +802,48 @@ fn the_gpu_renders_the_bunny_room_as_the_cpu_does() {
     let p = parity::parity(&a, &b);
     eprintln!("bunny_room at {SPP} spp, {SIZE}x{SIZE}: {p}");
     assert!(p.same(), "bunny_room: {p}");
+}
+
+/// Above 4096 primitives each backend traverses a tree built for it (`bvh::Traversal`): the
+/// bunny room with the bunny cut into 14 696 triangles renders alike on both.
+#[test]
+fn the_gpu_renders_a_mesh_in_its_own_tree_as_the_cpu_does_in_its() {
+    if gpu().is_none() {
+        return;
+    }
+    const SIZE: u32 = 32;
+    const SPP: u32 = 64;
+    let tris = cut_bunny(2);
+    let mesh = Mesh {
+        v: tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).collect(),
+        faces: (0..tris.len() as u32)
+            .map(|i| vec![3 * i, 3 * i + 1, 3 * i + 2])
+            .collect(),
+    };
+    let dir = temp_dir!("cut_bunny");
+    std::fs::write(dir.join("bunny_cut.ply"), binary_ply(&mesh, true)).unwrap();
+    let mut desc: Value =
+        serde_json::from_str(&std::fs::read_to_string(repo("scenes/bunny_room.json")).unwrap())
+            .unwrap();
+    desc["meshes"][0]["file"] = json!("bunny_cut.ply");
+    let scene = Scene::load(&write_scene(&dir, "scene.json", &desc)).unwrap();
+    let cpu_tree = FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL);
+    let gpu_tree = FlatScene::build(&scene, hexray::gpu::GpuRenderer::TRAVERSAL);
+    assert!(
+        gpu_tree.nodes.len() > cpu_tree.nodes.len(),
+        "the trees differ: {} and {} nodes",
+        cpu_tree.nodes.len(),
+        gpu_tree.nodes.len()
+    );
+    let render = Render::scene(&scene).size(SIZE, SIZE).spp(SPP);
+    let a = render.seed(1).cpu();
+    let b = render.seed(2).gpu();
+    let p = parity::parity(&a, &b);
+    eprintln!(
+        "bunny_room cut into {} triangles at {SPP} spp, {SIZE}x{SIZE}: {p}",
+        tris.len()
+    );
+    assert!(p.same(), "{p}");
 }
 
 #[test]

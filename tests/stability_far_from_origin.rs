@@ -256,7 +256,7 @@ fn paired_bias_far_from_origin() {
             desc,
             ..room.clone()
         };
-        let flat = FlatScene::build(&scene);
+        let flat = FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL);
         (scene, flat)
     };
     let paired = |a: &(hexray::scene::Scene, FlatScene),

@@ -59,7 +59,7 @@ fn scene() -> Scene {
 /// The precondition: each pixel's rays (centre and corners) meet the mirror sphere first, at a
 /// cosine whose density vanishes.
 fn assert_every_ray_is_tangent(scene: &Scene) {
-    let flat = FlatScene::build(scene);
+    let flat = FlatScene::build(scene, hexray::render::CpuBackend::TRAVERSAL);
     let camera = Camera::new(&scene.desc.camera, SIZE, SIZE);
     for y in 0..SIZE {
         for x in 0..SIZE {

@@ -1,8 +1,8 @@
-//! The bounding volume hierarchy: a binned-SAH build of a binary tree, collapsed into a
-//! four-wide tree of depth-first nodes that hold their children's boxes ([`BvhNode`]), and the
-//! traversal of one ray (closest hit or any hit) that the CPU's integrators use and
-//! `shaders/bvh.wgsl` repeats; the path tracer traces its rays eight at a time instead where that
-//! pays ([`crate::accel::packet`], the same hits).
+//! The bounding volume hierarchy: a binned-SAH build of a binary tree for the CPU's or the
+//! shader's traversal ([`Traversal`]), collapsed into a four-wide tree of depth-first nodes that
+//! hold their children's boxes ([`BvhNode`]), and the traversal of one ray (closest hit or any
+//! hit) that the CPU's integrators use and `shaders/bvh.wgsl` repeats; the path tracer traces its
+//! rays eight at a time instead where that pays ([`crate::accel::packet`], the same hits).
 
 use crate::accel::wide_bvh::{intersect_wide, WIDTH};
 use crate::layout::{
@@ -31,22 +31,77 @@ pub const STACK_SIZE: usize = 3 * MAX_DEPTH;
 /// The CPU's traversal stack over the wide tree: at most seven children pushed per level, and
 /// the wide tree is no deeper than the four-wide one.
 pub(crate) const WIDE_STACK_SIZE: usize = (crate::accel::wide_bvh::WIDTH - 1) * MAX_DEPTH;
-/// Cost of visiting a node relative to a leaf's test of one pack of four primitives (pbrt-v4
-/// uses 1/2 of one primitive's): trees above [`PACKED_LEAVES_ABOVE`] primitives.
-const TRAVERSAL_COST: f32 = 0.5;
-/// Cost of visiting a node relative to one primitive's test, in trees whose leaves cost their
-/// primitives. 1 rather than 1/2 gives bunny_room larger leaves (853 four-wide nodes instead of
-/// 1 383) and 1.04x the camera paths/s on the CPU, the rooms level; 2 cost tncg15_room 4 %
+/// A node visit's cost in the SAH relative to a leaf's test of one pack of four primitives
+/// (pbrt-v4 uses 1/2 of one primitive's): the CPU's large trees.
+const NODE_COST_PER_PACK: f32 = 0.5;
+/// A node visit's cost relative to one primitive's test, in small trees, on both backends. 1
+/// rather than 1/2 gives bunny_room larger leaves (853 four-wide nodes instead of 1 383) and
+/// 1.04x the camera paths/s on the CPU, the rooms level; 2 cost tncg15_room 4 %
 /// (docs/journal/2026-11-29_sah_collapse.md).
-const TRAVERSAL_COST_PER_PRIMITIVE: f32 = 1.0;
-/// Scenes of more primitives than this cost a leaf by its packs of four primitives, not by its
-/// primitives. In a large tree the packets hand their rays to single-ray traversal below the top
-/// levels ([`crate::accel::packet::SINGLE_RAY_LANES`]), which tests a leaf's four triangles at
-/// once ([`intersect_triangles4`]): full leaves then halve the nodes and the memory of
-/// bunny_room_1m and give it 1.15x the camera paths/s. In a small tree the rays stay in packets,
-/// which test a leaf's triangles one at a time, and there the reference rooms lost 7 – 10 % with
-/// full leaves (docs/journal/2026-11-29_meshes.md).
-const PACKED_LEAVES_ABOVE: usize = 4096;
+const NODE_COST_PER_PRIMITIVE: f32 = 1.0;
+/// A node visit's cost relative to one primitive's test in the shader's large trees. On
+/// lavapipe, bunny_room_1m, against the CPU's full leaves: path tracing 1.12 – 1.17x and vcm
+/// level, with 152 k four-wide nodes; 1 gave path 1.15 – 1.18x but vcm 0.92 – 0.96x, with
+/// 242 k nodes (docs/journal/2026-11-30_shader_leaves.md).
+const SHADER_NODE_COST_PER_PRIMITIVE: f32 = 2.0;
+/// Trees of more primitives than this are large, and costed for their traversal:
+/// - The CPU's cost a leaf by its packs of four primitives, not by its primitives. In a large tree
+///   the packets hand their rays to single-ray traversal below the top levels
+///   ([`crate::accel::packet::SINGLE_RAY_LANES`]), which tests a leaf's four triangles at once
+///   ([`intersect_triangles4`]): full leaves then halve the nodes and the memory of
+///   bunny_room_1m and give it 1.15x the camera paths/s. In a small tree the rays stay in
+///   packets, which test a leaf's triangles one at a time, and there the reference rooms lost
+///   7 – 10 % with full leaves (docs/journal/2026-11-29_meshes.md).
+/// - The shader's cost a leaf by its primitives, which it tests one per loop turn, and a node
+///   visit as [`SHADER_NODE_COST_PER_PRIMITIVE`].
+const LARGE_TREE_ABOVE: usize = 4096;
+
+/// The traversal a tree is built for: the SAH costs a leaf and a node visit what that traversal
+/// pays for them. Both backends read the same layout, and either renders any tree right.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traversal {
+    /// The CPU's (`accel::packet` and `traverse` over the eight-wide tree).
+    Cpu,
+    /// The shader's (`shaders/bvh.wgsl`, over the four-wide tree).
+    Shader,
+}
+
+/// The SAH's costs of one tree.
+#[derive(Clone, Copy)]
+struct SahCosts {
+    /// A leaf costs its packs of four, not its primitives.
+    packs: bool,
+    /// A node visit, in the leaf's unit.
+    node: f32,
+}
+
+impl SahCosts {
+    fn of(traversal: Traversal, primitives: usize) -> SahCosts {
+        match (traversal, primitives > LARGE_TREE_ABOVE) {
+            (_, false) => SahCosts {
+                packs: false,
+                node: NODE_COST_PER_PRIMITIVE,
+            },
+            (Traversal::Cpu, true) => SahCosts {
+                packs: true,
+                node: NODE_COST_PER_PACK,
+            },
+            (Traversal::Shader, true) => SahCosts {
+                packs: false,
+                node: SHADER_NODE_COST_PER_PRIMITIVE,
+            },
+        }
+    }
+
+    /// The cost of a leaf of `n` primitives.
+    fn leaf(self, n: usize) -> f32 {
+        if self.packs {
+            n.div_ceil(4) as f32
+        } else {
+            n as f32
+        }
+    }
+}
 
 #[derive(Clone, Copy)]
 struct Aabb {
@@ -103,12 +158,16 @@ impl Built {
     }
 }
 
-/// Builds the BVH over all triangles and spheres; returns the nodes (root first) and the
-/// primitive references that leaves index into: every primitive once, each leaf starting at a
-/// multiple of four, with [`PRIM_PADDING`] entries in the gaps and at the end (so `prims` is
+/// Builds the BVH over all triangles and spheres for `traversal`; returns the nodes (root first)
+/// and the primitive references that leaves index into: every primitive once, each leaf starting
+/// at a multiple of four, with [`PRIM_PADDING`] entries in the gaps and at the end (so `prims` is
 /// not one entry per primitive).
-pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u32>) {
-    let (nodes, prims, _) = build_trees(triangles, spheres);
+pub fn build(
+    triangles: &[Triangle],
+    spheres: &[Sphere],
+    traversal: Traversal,
+) -> (Vec<BvhNode>, Vec<u32>) {
+    let (nodes, prims, _) = build_trees(triangles, spheres, traversal);
     (nodes, prims)
 }
 
@@ -117,8 +176,9 @@ pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec<BvhNode>, Vec<u
 pub fn build_trees(
     triangles: &[Triangle],
     spheres: &[Sphere],
+    traversal: Traversal,
 ) -> (Vec<BvhNode>, Vec<u32>, Vec<WideNode>) {
-    let Some((root, info)) = binary_tree(triangles, spheres) else {
+    let Some((root, info)) = binary_tree(triangles, spheres, traversal) else {
         // Nothing to hit: a root whose slots are empty.
         let nodes = vec![BvhNode {
             count: [EMPTY_SLOT; 4],
@@ -136,7 +196,11 @@ pub fn build_trees(
 }
 
 /// The binary SAH tree over the primitives, and their build-order records (None for none).
-fn binary_tree(triangles: &[Triangle], spheres: &[Sphere]) -> Option<(Built, Vec<PrimInfo>)> {
+fn binary_tree(
+    triangles: &[Triangle],
+    spheres: &[Sphere],
+    traversal: Traversal,
+) -> Option<(Built, Vec<PrimInfo>)> {
     let mut info: Vec<PrimInfo> = Vec::with_capacity(triangles.len() + spheres.len());
     for (i, t) in triangles.iter().enumerate() {
         let mut b = Aabb::EMPTY;
@@ -166,8 +230,8 @@ fn binary_tree(triangles: &[Triangle], spheres: &[Sphere]) -> Option<(Built, Vec
     if info.is_empty() {
         return None;
     }
-    let packed = info.len() > PACKED_LEAVES_ABOVE;
-    let root = build_node(&mut info, 0, 0, packed);
+    let costs = SahCosts::of(traversal, info.len());
+    let root = build_node(&mut info, 0, 0, costs);
     Some((root, info))
 }
 
@@ -435,22 +499,10 @@ fn flatten(
 const PARALLEL_BUILD: usize = 4096;
 
 /// Builds the subtree over `info` (which starts at entry `start` of the whole array), reordering
-/// `info` so that every leaf's primitives are contiguous; a leaf costs its packs of four where
-/// `packed` ([`PACKED_LEAVES_ABOVE`]), else its primitives.
-fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -> Built {
-    let leaf_cost = |n: usize| {
-        if packed {
-            n.div_ceil(4) as f32
-        } else {
-            n as f32
-        }
-    };
-    // A node's visit in the units of `leaf_cost`.
-    let traversal = if packed {
-        TRAVERSAL_COST
-    } else {
-        TRAVERSAL_COST_PER_PRIMITIVE
-    };
+/// `info` so that every leaf's primitives are contiguous, by the SAH's `costs`.
+fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, costs: SahCosts) -> Built {
+    let leaf_cost = |n: usize| costs.leaf(n);
+    let traversal = costs.node;
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for p in info.iter() {
@@ -531,13 +583,13 @@ fn build_node(info: &mut [PrimInfo], start: usize, depth: usize, packed: bool) -
     let (left, right) = info.split_at_mut(mid);
     let (first, second) = if count > PARALLEL_BUILD {
         rayon::join(
-            || build_node(left, start, depth + 1, packed),
-            || build_node(right, start + mid, depth + 1, packed),
+            || build_node(left, start, depth + 1, costs),
+            || build_node(right, start + mid, depth + 1, costs),
         )
     } else {
         (
-            build_node(left, start, depth + 1, packed),
-            build_node(right, start + mid, depth + 1, packed),
+            build_node(left, start, depth + 1, costs),
+            build_node(right, start + mid, depth + 1, costs),
         )
     };
     Built::Interior {
@@ -666,8 +718,8 @@ pub(crate) fn occluded_below(scene: &FlatScene, ray: &Ray, start: u32, t_max: f3
     hit
 }
 
-/// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the shared four-wide
-/// tree collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the four-wide tree it is
+/// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the four-wide tree
+/// collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the four-wide tree it is
 /// made of, docs/journal/2026-11-25_wide_nodes.md). At each node the children's boxes are tested at
 /// once. The leaves among the hit children are tested first, so that their hits lower t_limit
 /// before anything is pushed; then the nearest hit interior child is visited next and the others
@@ -939,7 +991,7 @@ mod tests {
     #[test]
     fn stack_size_bounds_the_traversal_stack() {
         let tris = triangle_soup(500, 3, 20.0, 0.0);
-        let (nodes, _) = build(&tris, &[]);
+        let (nodes, _) = build(&tris, &[], Traversal::Cpu);
         let bound = stack_size(&nodes);
         // Replay the traversal's pushes with every box hit (the worst case): each node pushes
         // all its interior children but one.
@@ -969,11 +1021,41 @@ mod tests {
         assert!(bound <= STACK_SIZE);
     }
 
+    /// The leaves' mean number of primitives.
+    fn mean_leaf(nodes: &[BvhNode]) -> f64 {
+        let sizes: Vec<u32> = nodes
+            .iter()
+            .flat_map(|n| n.count)
+            .filter(|&k| k != 0 && k != EMPTY_SLOT)
+            .collect();
+        sizes.iter().sum::<u32>() as f64 / sizes.len() as f64
+    }
+
+    /// Up to [`LARGE_TREE_ABOVE`] primitives both traversals get the same tree; above it the
+    /// CPU's leaves fill their packs of four and the shader's, costed by primitive, split further.
+    #[test]
+    fn only_large_trees_differ_by_traversal() {
+        let small = triangle_soup(LARGE_TREE_ABOVE as u32, 7, 20.0, 0.0);
+        let (cpu, cpu_prims) = build(&small, &[], Traversal::Cpu);
+        let (gpu, gpu_prims) = build(&small, &[], Traversal::Shader);
+        assert_eq!(
+            bytemuck::cast_slice::<_, u8>(&cpu),
+            bytemuck::cast_slice::<_, u8>(&gpu)
+        );
+        assert_eq!(cpu_prims, gpu_prims);
+
+        let large = triangle_soup(LARGE_TREE_ABOVE as u32 + 1, 7, 20.0, 0.0);
+        let cpu = mean_leaf(&build(&large, &[], Traversal::Cpu).0);
+        let gpu = mean_leaf(&build(&large, &[], Traversal::Shader).0);
+        eprintln!("mean primitives a leaf: {cpu:.2} (packs), {gpu:.2} (primitives)");
+        assert!(cpu > 1.25 * gpu, "{cpu:.2} vs {gpu:.2}");
+    }
+
     /// Every primitive is in exactly one leaf, and every child box contains its primitives.
     #[test]
     fn leaves_partition_the_primitives_inside_their_boxes() {
         let tris = triangle_soup(300, 5, 10.0, 0.0);
-        let (nodes, prims) = build(&tris, &[]);
+        let (nodes, prims) = build(&tris, &[], Traversal::Cpu);
         let mut seen = vec![0; tris.len()];
         for n in &nodes {
             for c in 0..4 {
@@ -1012,7 +1094,7 @@ mod tests {
     }
 
     fn scene_of(tris: Vec<Triangle>, spheres: Vec<Sphere>) -> FlatScene {
-        let (nodes, prims, wide) = build_trees(&tris, &spheres);
+        let (nodes, prims, wide) = build_trees(&tris, &spheres, Traversal::Cpu);
         FlatScene::from_tree(tris, spheres, nodes, prims, wide)
     }
 
@@ -1035,7 +1117,7 @@ mod tests {
     #[test]
     fn the_wide_trees_are_the_collapses_of_least_node_area() {
         let tris = triangle_soup(3000, 7, 10.0, 0.0);
-        let (root, _) = binary_tree(&tris, &[]).unwrap();
+        let (root, _) = binary_tree(&tris, &[], Traversal::Cpu).unwrap();
         for width in [4, 8] {
             let least = Collapse::of(&root, width).cost[1];
             let greedy = greedy_area(&root, width);
@@ -1045,7 +1127,7 @@ mod tests {
                 "width {width}: {least} against {greedy}"
             );
         }
-        let (nodes, _, wide) = build_trees(&tris, &[]);
+        let (nodes, _, wide) = build_trees(&tris, &[], Traversal::Cpu);
         let union = |boxes: Vec<(Vec3, Vec3)>| {
             let mut b = Aabb::EMPTY;
             for (lo, hi) in boxes {

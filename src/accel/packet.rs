@@ -1068,7 +1068,7 @@ mod avx {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::build_trees;
+    use crate::accel::bvh::{build_trees, Traversal};
     use crate::layout::{Sphere, Triangle};
     use glam::Vec3;
 
@@ -1102,7 +1102,7 @@ mod tests {
                 ..Default::default()
             })
             .collect::<Vec<_>>();
-        let (nodes, prims, wide) = build_trees(&tris, &spheres);
+        let (nodes, prims, wide) = build_trees(&tris, &spheres, Traversal::Cpu);
         FlatScene::from_tree(tris, spheres, nodes, prims, wide)
     }
 
@@ -1225,7 +1225,7 @@ mod tests {
             assert_eq!(h.t, 1.0);
         }
         for tris in [vec![a, b], vec![b, a]] {
-            let (nodes, prims, wide) = build_trees(&tris, &[]);
+            let (nodes, prims, wide) = build_trees(&tris, &[], Traversal::Cpu);
             let scene = FlatScene::from_tree(tris, vec![], nodes, prims, wide);
             let scalar = intersect_closest(&scene, &ray, f32::MAX).unwrap();
             let mut hits = [None; 3];
@@ -1246,7 +1246,7 @@ mod tests {
         // Triangle a spans x in [-1, 0]; c, far away, gives the tree a second leaf.
         let a = Triangle::new([0.0, -1.0, 1.0], [0.0, 1.0, 1.0], [-1.0, 0.0, 1.0], 0);
         let c = Triangle::new([5.0, 5.0, 5.0], [6.0, 5.0, 5.0], [5.0, 6.0, 5.0], 0);
-        let (nodes, prims, wide) = build_trees(&[a, c], &[]);
+        let (nodes, prims, wide) = build_trees(&[a, c], &[], Traversal::Cpu);
         let scene = FlatScene::from_tree(vec![a, c], vec![], nodes, prims, wide);
         // Lane 0 runs in the face x = 0 of a's box; lane 1 enters the box.
         let grazing = Ray {

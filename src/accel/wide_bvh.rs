@@ -109,6 +109,7 @@ pub fn intersect_wide(node: &WideNode, o: Vec3, inv_d: Vec3, t_max: f32) -> ([f3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::bvh::Traversal;
     use crate::layout::Triangle;
 
     /// The leaves under four-wide node `index`, depth first in slot order, as (first entry,
@@ -169,14 +170,14 @@ mod tests {
     #[test]
     fn the_wide_tree_keeps_every_leaf_its_box_and_its_order() {
         for n in [1, 3, 5, 17, 300, 5000] {
-            let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(n), &[]);
+            let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(n), &[], Traversal::Cpu);
             assert!(same_leaves(&nodes, &wide), "{n} triangles");
         }
     }
 
     #[test]
     fn the_wide_tree_has_fewer_levels_than_the_four_wide_one() {
-        let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(5000), &[]);
+        let (nodes, _, wide) = crate::accel::bvh::build_trees(&soup(5000), &[], Traversal::Cpu);
         assert!(
             wide.len() * 3 < nodes.len() * 2,
             "{} wide nodes for {} four-wide ones",
@@ -187,7 +188,7 @@ mod tests {
 
     #[test]
     fn one_for_one_keeps_every_node_as_it_is() {
-        let (nodes, _) = crate::accel::bvh::build(&soup(300), &[]);
+        let (nodes, _) = crate::accel::bvh::build(&soup(300), &[], Traversal::Cpu);
         let wide = one_for_one(&nodes);
         assert_eq!(wide.len(), nodes.len());
         assert!(same_leaves(&nodes, &wide));
@@ -199,7 +200,7 @@ mod tests {
     /// The check above fails when a slot goes missing: it can tell a broken collapse.
     #[test]
     fn a_dropped_slot_is_caught() {
-        let (nodes, _, mut wide) = crate::accel::bvh::build_trees(&soup(300), &[]);
+        let (nodes, _, mut wide) = crate::accel::bvh::build_trees(&soup(300), &[], Traversal::Cpu);
         let last = wide.len() - 1;
         let c = (0..WIDTH)
             .rev()
@@ -214,7 +215,7 @@ mod tests {
     /// and the same verdict, occupied slots only, in the slot's bit of the mask.
     #[test]
     fn the_wide_slab_test_is_the_slab_test_of_each_slot() {
-        let (_, _, wide) = crate::accel::bvh::build_trees(&soup(2000), &[]);
+        let (_, _, wide) = crate::accel::bvh::build_trees(&soup(2000), &[], Traversal::Cpu);
         let node = &wide[0];
         for i in 0..1000u32 {
             let r = |k| {

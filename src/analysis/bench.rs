@@ -8,6 +8,7 @@
 //! integrator; the GPU draws the very same random streams, so its rays per path is measured by
 //! the CPU on the first samples of the same streams rather than with atomics in the kernel.
 
+use crate::accel::bvh::Traversal;
 use crate::cpu::shadow_probe::shadow_threshold_for;
 use crate::film::Film;
 use crate::gpu::{Checks, Gpu, GpuRenderer, Residency};
@@ -29,6 +30,16 @@ use std::time::Instant;
 pub enum Which {
     Cpu,
     Gpu,
+}
+
+impl Which {
+    /// The traversal this backend's BVH is built for (`FlatScene::build`).
+    pub fn traversal(self) -> Traversal {
+        match self {
+            Which::Cpu => CpuBackend::TRAVERSAL,
+            Which::Gpu => GpuRenderer::TRAVERSAL,
+        }
+    }
 }
 
 /// What to run.
@@ -91,22 +102,31 @@ pub fn run(config: &Config, gpu: Option<&Gpu>, mut on_row: impl FnMut(&Row)) -> 
     let mut rows = Vec::new();
     for path in &config.scenes {
         let scene = Scene::load(path).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let flat = FlatScene::build(&scene);
+        // The scene flattened for each backend, whose BVHs differ in large scenes.
+        let flats: Vec<FlatScene> = config
+            .backends
+            .iter()
+            .map(|which| FlatScene::build(&scene, which.traversal()))
+            .collect();
+        let Some(first) = flats.first() else {
+            continue;
+        };
         let camera = Camera::new(&scene.desc.camera, config.width, config.height);
         for &method in &config.methods {
-            // Rays per path on the first samples of the streams every backend draws.
+            // Rays per path on the first samples of the streams every backend draws (the
+            // same rays whichever tree finds their hits).
             let probe_spp = config.spp.min(4);
-            let mut probe = CpuBackend::new(&flat, camera, config.seed, config.threads)?;
+            let mut probe = CpuBackend::new(first, camera, config.seed, config.threads)?;
             probe.light_samples = config.light_samples;
             probe.method = method;
             probe.pass(0, probe_spp, &mut Film::new(config.width, config.height))?;
             let paths = |spp: u32| config.width as f64 * config.height as f64 * spp as f64;
             let rays_per_path = probe.rays as f64 / paths(probe_spp);
 
-            for &which in &config.backends {
+            for (&which, flat) in config.backends.iter().zip(&flats) {
                 let (mut backend, compile_seconds) = make_backend(
                     which,
-                    &flat,
+                    flat,
                     camera,
                     config.seed,
                     method,

@@ -115,7 +115,6 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
         Err(code) => return Ok(code),
     };
     let (w, h) = (reference.width as u32, reference.height as u32);
-    let flat = FlatScene::build(&scene);
     let camera = Camera::new(&scene.desc.camera, w, h);
     let threads = args.threads.map_or_else(
         || std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -124,6 +123,11 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
     let mut points = Vec::new();
     let mut devices = Vec::new();
     for b in &args.backend {
+        let which = match b {
+            BenchBackend::Cpu => Which::Cpu,
+            BenchBackend::Gpu => Which::Gpu,
+        };
+        let flat = FlatScene::build(&scene, which.traversal());
         for &method in &args.method {
             // Several shadow-ray counts are path tracing's alone.
             let counts: &[u32] = if method == Method::Path {
@@ -135,10 +139,6 @@ pub(crate) fn curve(args: &CurveArgs) -> Result<ExitCode> {
                 .iter()
                 .flat_map(|n| args.sampler.iter().map(move |s| (n, s)))
             {
-                let which = match b {
-                    BenchBackend::Cpu => Which::Cpu,
-                    BenchBackend::Gpu => Which::Gpu,
-                };
                 let (mut backend, compile) = make_backend(
                     which,
                     &flat,

@@ -353,7 +353,20 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     let budget = budget_of(args, method, before);
     check_memory(args, method)?;
 
-    let flat = FlatScene::build(&scene);
+    let acquired = std::time::Instant::now();
+    let gpu = choose_gpu(args)?;
+    if gpu.is_some() && !args.quiet {
+        eprintln!(
+            "hexray: adapter and device in {:.2} s",
+            acquired.elapsed().as_secs_f64()
+        );
+    }
+    // The BVH for the backend that will traverse it.
+    let traversal = match gpu {
+        Some(_) => gpu::GpuRenderer::TRAVERSAL,
+        None => CpuBackend::TRAVERSAL,
+    };
+    let flat = FlatScene::build(&scene, traversal);
     let camera = Camera::new(&scene.desc.camera, args.width, args.height);
     let radius = merge_radius_of(
         method,
@@ -369,14 +382,6 @@ fn render_steps(args: &RenderArgs, stop: &StopRequest) -> Step<ExitCode> {
     // The last check before any work: the outputs can be written (not found after the render).
     output::check_writable(&out, args.variance)
         .map_err(|e| refuse(format!("--out {}: {e:#}", out.display())))?;
-    let acquired = std::time::Instant::now();
-    let gpu = choose_gpu(args)?;
-    if gpu.is_some() && !args.quiet {
-        eprintln!(
-            "hexray: adapter and device in {:.2} s",
-            acquired.elapsed().as_secs_f64()
-        );
-    }
     // Without --radius, a hardware GPU merges within a share of the default
     // (`merging::HARDWARE_GPU_RADIUS_SCALE`): its renders run many more iterations. photon-map's
     // radius, whose bias no number of iterations removes, is the same on every backend.

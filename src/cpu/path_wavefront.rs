@@ -391,7 +391,7 @@ mod tests {
         for name in ["tncg15_room", "glass_room", "cornell_box"] {
             let path = format!("{}/scenes/{name}.json", env!("CARGO_MANIFEST_DIR"));
             let scene = Scene::load(std::path::Path::new(&path)).expect("scene");
-            let flat = FlatScene::build(&scene);
+            let flat = FlatScene::build(&scene, crate::accel::bvh::Traversal::Cpu);
             let camera = Camera::new(&scene.desc.camera, 64, 64);
             let pixels: Vec<(u32, u32, u32)> = (20..31)
                 .flat_map(|y| (30..43).map(move |x| (y * 64 + x, x, y)))

@@ -30,6 +30,10 @@ pub struct CpuBackend<'a> {
 }
 
 impl<'a> CpuBackend<'a> {
+    /// The traversal the scene's BVH is built for (`bvh::Traversal`): in a large tree the
+    /// CPU's single rays test a leaf's triangles four at once.
+    pub const TRAVERSAL: crate::accel::bvh::Traversal = crate::accel::bvh::Traversal::Cpu;
+
     pub fn new(
         scene: &'a crate::layout::FlatScene,
         camera: crate::transport::camera::Camera,

@@ -294,7 +294,7 @@ mod tests {
             ]
         }"#;
         let scene = Scene::from_json(json, std::path::Path::new("mixed_lights.json")).unwrap();
-        let flat = FlatScene::build(&scene);
+        let flat = FlatScene::build(&scene, crate::accel::bvh::Traversal::Cpu);
         let mut chosen = [0u32; 2];
         for i in 0..400u32 {
             let u = |k: u32, l: usize| {

@@ -84,7 +84,7 @@ pub(crate) use temp_dir;
 
 pub fn load(rel: &str) -> (Scene, FlatScene) {
     let scene = Scene::load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
-    let flat = FlatScene::build(&scene);
+    let flat = FlatScene::build(&scene, hexray::render::CpuBackend::TRAVERSAL);
     (scene, flat)
 }
 

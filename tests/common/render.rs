@@ -5,7 +5,7 @@
 //! let film = Render::file("scenes/cornell_box.json").size(64, 64).spp(16).seed(3).on(backend);
 //! ```
 
-use super::{load, repo};
+use super::repo;
 use hexray::cpu::shadow_probe::shadow_threshold_for;
 use hexray::cpu::{
     render_iterations, render_pass, render_radiosity_pass, render_whitted_pass, LightPassBuffers,
@@ -151,13 +151,13 @@ impl<'a> Render<'a> {
     /// Radiosity's solution on the CPU (the scene's patches at this render's settings, solved
     /// with its seed and faults).
     pub fn cpu_solution(&self) -> hexray::cpu::radiosity::Solution {
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(Backend::Cpu);
         self.cpu_solution_of(&flat)
     }
 
     /// Radiosity's patch table at this render's settings (as both backends cut it).
     pub fn cpu_patches(&self) -> Patches {
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(Backend::Cpu);
         Patches::build(&flat, self.radiosity.patch_size).unwrap()
     }
 
@@ -173,13 +173,24 @@ impl<'a> Render<'a> {
         .0
     }
 
-    fn loaded(&self) -> (std::borrow::Cow<'a, Scene>, FlatScene) {
+    /// The scene, and its layout flattened for `backend` (its BVH built for that backend's
+    /// traversal, `FlatScene::build`).
+    fn loaded(&self, backend: Backend) -> (std::borrow::Cow<'a, Scene>, FlatScene) {
+        let traversal = match backend {
+            Backend::Cpu => hexray::render::CpuBackend::TRAVERSAL,
+            Backend::Gpu => GpuRenderer::TRAVERSAL,
+        };
+        let scene = self.source_scene();
+        let flat = FlatScene::build(&scene, traversal);
+        (scene, flat)
+    }
+
+    fn source_scene(&self) -> std::borrow::Cow<'a, Scene> {
         match self.source {
             Source::File(rel) => {
-                let (scene, flat) = load(rel);
-                (std::borrow::Cow::Owned(scene), flat)
+                std::borrow::Cow::Owned(Scene::load(&repo(rel)).unwrap_or_else(|e| panic!("{e}")))
             }
-            Source::Scene(scene) => (std::borrow::Cow::Borrowed(scene), FlatScene::build(scene)),
+            Source::Scene(scene) => std::borrow::Cow::Borrowed(scene),
         }
     }
 
@@ -197,7 +208,7 @@ impl<'a> Render<'a> {
 
     /// The film on the CPU.
     pub fn cpu(&self) -> Film {
-        let (scene, flat) = self.loaded();
+        let (scene, flat) = self.loaded(Backend::Cpu);
         let camera = self.camera(&scene);
         let mut film = self.new_film();
         if self.method.splats() {
@@ -267,7 +278,7 @@ impl<'a> Render<'a> {
     /// and what the render goes on from. Returns the film and the samples the stopped pass kept.
     pub fn stopped_under_way(&self, backend: Backend, after: std::time::Duration) -> (Film, u32) {
         use std::sync::atomic::{AtomicBool, Ordering};
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(backend);
         let mut target = self.backend(backend, &flat);
         let mut film = self.new_film();
         let stop = AtomicBool::new(false);
@@ -287,7 +298,7 @@ impl<'a> Render<'a> {
     /// at the error target `relmse` (`--target-error`), or at `spp` samples, whichever first.
     pub fn until_error_target(&self, backend: Backend, relmse: f64) -> Film {
         use hexray::render::{render_progressive, Budget, StopReason};
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(backend);
         let mut target = self.backend(backend, &flat);
         let mut film = self.new_film();
         let budget = Budget {
@@ -310,7 +321,7 @@ impl<'a> Render<'a> {
     ) -> Film {
         use hexray::render::adaptive::render_adaptive;
         use hexray::render::{Budget, StopReason};
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(backend);
         let mut target = self.backend(backend, &flat);
         let mut film = self.new_film();
         let budget = Budget {
@@ -339,7 +350,7 @@ impl<'a> Render<'a> {
     ) -> (Film, hexray::render::StopReason) {
         use hexray::render::adaptive::{render_adaptive, AdaptiveSettings};
         use std::sync::atomic::{AtomicBool, Ordering};
-        let (_, flat) = self.loaded();
+        let (_, flat) = self.loaded(backend);
         let mut target = self.backend(backend, &flat);
         let mut film = self.new_film();
         let budget = hexray::render::Budget {
@@ -372,7 +383,7 @@ impl<'a> Render<'a> {
         flat: &'f FlatScene,
     ) -> Box<dyn hexray::render::Backend + 'f> {
         use hexray::render::{CpuBackend, GpuBackend};
-        let camera = self.camera(&self.loaded().0);
+        let camera = self.camera(&self.source_scene());
         match backend {
             Backend::Cpu => {
                 let mut b = CpuBackend::new(flat, camera, self.seed, 2).unwrap();
@@ -393,7 +404,7 @@ impl<'a> Render<'a> {
     /// that drive it directly.
     pub fn gpu_renderer(&self) -> GpuRenderer {
         let gpu = super::gpu().expect("a GPU test runs only where common::gpu() gives one");
-        let (scene, flat) = self.loaded();
+        let (scene, flat) = self.loaded(Backend::Gpu);
         let camera = self.camera(&scene);
         let mut r = GpuRenderer::new(
             &gpu.device,
@@ -425,7 +436,7 @@ impl<'a> Render<'a> {
         let (w, h) = (self.width, self.height);
         match backend {
             Backend::Cpu => {
-                let (scene, flat) = self.loaded();
+                let (scene, flat) = self.loaded(Backend::Cpu);
                 let camera = self.camera(&scene);
                 let radius = self
                     .radius

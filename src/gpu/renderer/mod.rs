@@ -182,6 +182,10 @@ fn scene_bind_group(
 }
 
 impl GpuRenderer {
+    /// The traversal the scene's BVH is built for (`bvh::Traversal`): the shader tests a leaf's
+    /// primitives one per loop turn.
+    pub const TRAVERSAL: crate::accel::bvh::Traversal = crate::accel::bvh::Traversal::Shader;
+
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
