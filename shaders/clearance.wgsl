@@ -18,32 +18,27 @@ fn clearance(p: vec3<f32>, prim: u32, bound: f32) -> f32 {
     let ap = abs(p);
     let tolerance = COPLANAR_OFFSET * max(max(max(ap.x, ap.y), ap.z) + bound, 1.0);
     var best2 = bound * bound;
-    // Interior nodes still to visit: the traversal goes on into one child of a node and
-    // pushes the others (at most three per level, `bvh::stack_size`).
-    var stack: array<u32, STACK_SIZE>;
+    // Interior nodes still to visit, each with its box's squared distance from p (bits in .y).
+    // At each node the leaves in reach are tested first; then the traversal goes on into the
+    // nearest interior child in reach and pushes the others farthest first, so that the nearest
+    // of them pops first (at most three per level, `bvh::stack_size`), and a popped node that
+    // best2 has since passed is dropped.
+    var stack: array<vec2<u32>, STACK_SIZE>;
     var sp = 0u;
     var current = 0u;
     loop {
         let node = nodes[current];
-        var next = NO_NODE;
+        // Squared distance from p to each child's box.
+        var d2 = vec4<f32>();
         for (var c = 0u; c < 4u; c++) {
-            let count = node.count[c];
-            if count == EMPTY_SLOT {
-                continue;
-            }
-            // Squared distance from p to the child's box.
             let lo = vec3<f32>(node.min_x[c], node.min_y[c], node.min_z[c]);
             let hi = vec3<f32>(node.max_x[c], node.max_y[c], node.max_z[c]);
             let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
-            if dot(d, d) >= best2 {
-                continue;
-            }
-            if count == 0u {
-                if next != NO_NODE {
-                    stack[sp] = next;
-                    sp++;
-                }
-                next = node.child[c];
+            d2[c] = dot(d, d);
+        }
+        for (var c = 0u; c < 4u; c++) {
+            let count = node.count[c];
+            if count == EMPTY_SLOT || count == 0u || d2[c] >= best2 {
                 continue;
             }
             for (var k = node.child[c]; k < node.child[c] + count; k++) {
@@ -51,30 +46,61 @@ fn clearance(p: vec3<f32>, prim: u32, bound: f32) -> f32 {
                 if other == PRIM_PADDING || other == prim {
                     continue;
                 }
-                var d2 = 0.0;
+                var d2_other = 0.0;
                 if (other & PRIM_SPHERE_BIT) != 0u {
                     let s = spheres[other & ~PRIM_SPHERE_BIT];
                     let ds = length(p - s.center) - s.radius;
-                    d2 = ds * ds;
+                    d2_other = ds * ds;
                 } else {
                     let t = triangles[other];
                     if own_is_triangle && coplanar(own, t, tolerance) {
                         continue;
                     }
                     let q = closest_point_on_triangle(p, t) - p;
-                    d2 = dot(q, q);
+                    d2_other = dot(q, q);
                 }
-                best2 = min(best2, d2);
+                best2 = min(best2, d2_other);
             }
         }
-        if next != NO_NODE {
-            current = next;
-        } else if sp > 0u {
-            sp--;
-            current = stack[sp];
-        } else {
+        var next = NO_NODE;
+        var d2_next = 0.0;
+        let base = sp;
+        for (var c = 0u; c < 4u; c++) {
+            if node.count[c] != 0u || d2[c] >= best2 {
+                continue;
+            }
+            var entry = vec2<u32>(node.child[c], bitcast<u32>(d2[c]));
+            if next == NO_NODE {
+                next = node.child[c];
+                d2_next = d2[c];
+                continue;
+            }
+            if d2[c] < d2_next {
+                entry = vec2<u32>(next, bitcast<u32>(d2_next));
+                next = node.child[c];
+                d2_next = d2[c];
+            }
+            // This node's pushes in decreasing distance: the nearest pops first.
+            var j = sp;
+            stack[sp] = entry;
+            sp += 1u;
+            while j > base && bitcast<f32>(stack[j - 1u].y) < bitcast<f32>(stack[j].y) {
+                let held = stack[j - 1u];
+                stack[j - 1u] = stack[j];
+                stack[j] = held;
+                j -= 1u;
+            }
+        }
+        while next == NO_NODE && sp > 0u {
+            sp -= 1u;
+            if bitcast<f32>(stack[sp].y) < best2 {
+                next = stack[sp].x;
+            }
+        }
+        if next == NO_NODE {
             break;
         }
+        current = next;
     }
     // Where nothing lies nearer, the bound itself: a GPU's square root, which WGSL lets be
     // approximate, may round sqrt(bound²) off it.

@@ -34,29 +34,25 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
     let own = (prim & PRIM_SPHERE_BIT == 0).then(|| &scene.triangles[prim as usize]);
     let tolerance = COPLANAR_OFFSET * (p.abs().max_element() + bound).max(1.0);
     let mut best2 = bound * bound;
-    // Interior nodes still to visit: the traversal goes on into one child of a node and pushes
-    // the others (at most three per level, `bvh::stack_size`).
-    let mut stack = [0u32; STACK_SIZE];
+    // Interior nodes still to visit, each with its box's squared distance from p. At each node
+    // the leaves in reach are tested first; then the traversal goes on into the nearest interior
+    // child in reach and pushes the others farthest first, so that the nearest of them pops
+    // first (at most three per level, `bvh::stack_size`), and a popped node that best2 has since
+    // passed is dropped. Nearest first, the primitives that lower best2 are met soonest and fewer
+    // boxes stay in reach; the minimum found is the same in any order.
+    let mut stack = [(0u32, 0f32); STACK_SIZE];
     let mut top = 0usize;
     let mut current = 0u32;
     loop {
         let node = &scene.nodes[current as usize];
-        let mut next = None;
-        for c in 0..4 {
-            let count = node.count[c];
-            if count == EMPTY_SLOT {
-                continue;
-            }
-            // Squared distance from p to the child's box.
+        // Squared distance from p to each child's box.
+        let d2: [f32; 4] = std::array::from_fn(|c| {
             let (lo, hi) = node.child_bounds(c);
-            if (lo - p).max(p - hi).max(Vec3::ZERO).length_squared() >= best2 {
-                continue;
-            }
-            if count == 0 {
-                if let Some(n) = next.replace(node.child[c]) {
-                    stack[top] = n;
-                    top += 1;
-                }
+            (lo - p).max(p - hi).max(Vec3::ZERO).length_squared()
+        });
+        for (c, &d2_box) in d2.iter().enumerate() {
+            let count = node.count[c];
+            if count == EMPTY_SLOT || count == 0 || d2_box >= best2 {
                 continue;
             }
             for k in node.child[c]..node.child[c] + count {
@@ -64,7 +60,7 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
                 if other == PRIM_PADDING || other == prim {
                     continue;
                 }
-                let d2 = if other & PRIM_SPHERE_BIT != 0 {
+                let d2_other = if other & PRIM_SPHERE_BIT != 0 {
                     let s = &scene.spheres[(other & !PRIM_SPHERE_BIT) as usize];
                     let d = (p - Vec3::from(s.center)).length() - s.radius;
                     d * d
@@ -75,17 +71,46 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
                     }
                     (closest_point_on_triangle(p, t) - p).length_squared()
                 };
-                best2 = best2.min(d2);
+                best2 = best2.min(d2_other);
             }
         }
-        current = match next {
-            Some(n) => n,
-            None if top > 0 => {
-                top -= 1;
-                stack[top]
+        let mut next: Option<(u32, f32)> = None;
+        let base = top;
+        for (c, &d2_box) in d2.iter().enumerate() {
+            if node.count[c] != 0 || d2_box >= best2 {
+                continue;
             }
+            let mut entry = (node.child[c], d2_box);
+            match next {
+                None => {
+                    next = Some(entry);
+                    continue;
+                }
+                Some(n) if entry.1 < n.1 => {
+                    next = Some(entry);
+                    entry = n;
+                }
+                Some(_) => {}
+            }
+            // This node's pushes in decreasing distance: the nearest pops first.
+            let mut j = top;
+            stack[top] = entry;
+            top += 1;
+            while j > base && stack[j - 1].1 < stack[j].1 {
+                stack.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        while next.is_none() && top > 0 {
+            top -= 1;
+            if stack[top].1 < best2 {
+                next = Some(stack[top]);
+            }
+        }
+        match next {
+            Some((n, _)) => current = n,
             None => break,
-        };
+        }
     }
     // Where nothing lies nearer, the bound itself: a GPU's square root, which WGSL lets be
     // approximate, may round sqrt(bound²) off it (shaders/clearance.wgsl, the same step).
