@@ -14,6 +14,39 @@ fn prim_ref(k: u32) -> u32 {
     return prims[k >> 2u][k & 3u];
 }
 
+// Nearest first (`bvh::offer_nearest_first`): offers child `entry` (a node and the bits of its
+// distance) of the node being visited. The nearest child offered so far becomes `next` (.x
+// NO_NODE for none), the node visited next; the others go onto `stack` above `base` (its height
+// before this node's offers) in decreasing distance, so that the nearest of them pops first. The
+// ray traversal and the clearance query share it.
+fn offer_nearest_first(
+    entry_in: vec2<u32>,
+    next: ptr<function, vec2<u32>>,
+    stack: ptr<function, array<vec2<u32>, STACK_SIZE>>,
+    base: u32,
+    sp: ptr<function, u32>,
+) {
+    var entry = entry_in;
+    if (*next).x == NO_NODE {
+        *next = entry;
+        return;
+    }
+    if bitcast<f32>(entry.y) < bitcast<f32>((*next).y) {
+        let held = *next;
+        *next = entry;
+        entry = held;
+    }
+    var j = *sp;
+    (*stack)[j] = entry;
+    *sp = j + 1u;
+    while j > base && bitcast<f32>((*stack)[j - 1u].y) < bitcast<f32>((*stack)[j].y) {
+        let held = (*stack)[j - 1u];
+        (*stack)[j - 1u] = (*stack)[j];
+        (*stack)[j] = held;
+        j -= 1u;
+    }
+}
+
 // The primitive a traversal found nearest so far.
 struct Candidate {
     found: bool,
@@ -98,8 +131,7 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
                 }
             }
         }
-        var next = NO_NODE;
-        var t_next = 0.0;
+        var next = vec2<u32>(NO_NODE, 0u);
         let base = sp;
         while inner != 0u {
             let c = countTrailingZeros(inner);
@@ -107,40 +139,21 @@ fn traverse(ray: Ray, t_max: f32, any_hit: bool) -> Candidate {
             if t_enter[c] > best.t {
                 continue;
             }
-            var entry = vec2<u32>(node.child[c], bitcast<u32>(t_enter[c]));
-            if next == NO_NODE {
-                next = node.child[c];
-                t_next = t_enter[c];
-                continue;
-            }
-            if t_enter[c] < t_next {
-                entry = vec2<u32>(next, bitcast<u32>(t_next));
-                next = node.child[c];
-                t_next = t_enter[c];
-            }
-            // This node's pushes in decreasing entry distance: the nearest pops first.
-            var j = sp;
-            stack[sp] = entry;
-            sp += 1u;
-            while j > base && bitcast<f32>(stack[j - 1u].y) < bitcast<f32>(stack[j].y) {
-                let held = stack[j - 1u];
-                stack[j - 1u] = stack[j];
-                stack[j] = held;
-                j -= 1u;
-            }
+            let entry = vec2<u32>(node.child[c], bitcast<u32>(t_enter[c]));
+            offer_nearest_first(entry, &next, &stack, base, &sp);
         }
         // Descend into the nearest interior child, or pop the most recently pushed one that the
         // ray still enters before best.t.
-        while next == NO_NODE && sp > 0u {
+        while next.x == NO_NODE && sp > 0u {
             sp -= 1u;
             if bitcast<f32>(stack[sp].y) <= best.t {
-                next = stack[sp].x;
+                next = stack[sp];
             }
         }
-        if next == NO_NODE {
+        if next.x == NO_NODE {
             break;
         }
-        current = next;
+        current = next.x;
     }
     return best;
 }

@@ -62,45 +62,27 @@ fn clearance(p: vec3<f32>, prim: u32, bound: f32) -> f32 {
                 best2 = min(best2, d2_other);
             }
         }
-        var next = NO_NODE;
-        var d2_next = 0.0;
+        var next = vec2<u32>(NO_NODE, 0u);
         let base = sp;
         for (var c = 0u; c < 4u; c++) {
             if node.count[c] != 0u || d2[c] >= best2 {
                 continue;
             }
-            var entry = vec2<u32>(node.child[c], bitcast<u32>(d2[c]));
-            if next == NO_NODE {
-                next = node.child[c];
-                d2_next = d2[c];
-                continue;
-            }
-            if d2[c] < d2_next {
-                entry = vec2<u32>(next, bitcast<u32>(d2_next));
-                next = node.child[c];
-                d2_next = d2[c];
-            }
-            // This node's pushes in decreasing distance: the nearest pops first.
-            var j = sp;
-            stack[sp] = entry;
-            sp += 1u;
-            while j > base && bitcast<f32>(stack[j - 1u].y) < bitcast<f32>(stack[j].y) {
-                let held = stack[j - 1u];
-                stack[j - 1u] = stack[j];
-                stack[j] = held;
-                j -= 1u;
-            }
+            let entry = vec2<u32>(node.child[c], bitcast<u32>(d2[c]));
+            offer_nearest_first(entry, &next, &stack, base, &sp);
         }
-        while next == NO_NODE && sp > 0u {
+        // Descend into the nearest interior child, or pop the most recently pushed one still in
+        // reach.
+        while next.x == NO_NODE && sp > 0u {
             sp -= 1u;
             if bitcast<f32>(stack[sp].y) < best2 {
-                next = stack[sp].x;
+                next = stack[sp];
             }
         }
-        if next == NO_NODE {
+        if next.x == NO_NODE {
             break;
         }
-        current = next;
+        current = next.x;
     }
     // Where nothing lies nearer, the bound itself: a GPU's square root, which WGSL lets be
     // approximate, may round sqrt(bound²) off it.

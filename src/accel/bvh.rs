@@ -718,6 +718,36 @@ pub(crate) fn occluded_below(scene: &FlatScene, ray: &Ray, start: u32, t_max: f3
     hit
 }
 
+/// Nearest first: offers child `entry` (a node and its distance) of the node being visited.
+/// The nearest child offered so far becomes `next`, the node visited next; the others go onto
+/// `stack` above `base` (its height before this node's offers) in decreasing distance, so that
+/// the nearest of them pops first. The ray traversal and the clearance query share it.
+#[inline(always)]
+pub(crate) fn offer_nearest_first<const N: usize>(
+    entry: (u32, f32),
+    next: &mut Option<(u32, f32)>,
+    stack: &mut ArrayVec<(u32, f32), N>,
+    base: usize,
+) {
+    let entry = match *next {
+        None => {
+            *next = Some(entry);
+            return;
+        }
+        Some(n) if entry.1 < n.1 => {
+            *next = Some(entry);
+            n
+        }
+        Some(_) => entry,
+    };
+    let mut j = stack.len();
+    stack.push(entry);
+    while j > base && stack[j - 1].1 < stack[j].1 {
+        stack.swap(j - 1, j);
+        j -= 1;
+    }
+}
+
 /// One traversal for both modes, over the CPU's wide tree (`FlatScene::wide`, the four-wide tree
 /// collapsed to eight-wide nodes: 4 – 13 % more camera paths/s than the four-wide tree it is
 /// made of, docs/journal/2026-11-25_wide_nodes.md). At each node the children's boxes are tested at
@@ -822,25 +852,7 @@ fn traverse(
             if t_enter[c] > t_limit {
                 continue;
             }
-            let mut entry = (node.child[c], t_enter[c]);
-            match next {
-                None => {
-                    next = Some(entry);
-                    continue;
-                }
-                Some(n) if entry.1 < n.1 => {
-                    next = Some(entry);
-                    entry = n;
-                }
-                Some(_) => {}
-            }
-            // This node's pushes in decreasing entry distance: the nearest pops first.
-            let mut j = stack.len();
-            stack.push(entry);
-            while j > base && stack[j - 1].1 < stack[j].1 {
-                stack.swap(j - 1, j);
-                j -= 1;
-            }
+            offer_nearest_first((node.child[c], t_enter[c]), &mut next, &mut stack, base);
         }
         // Descend into the nearest interior child, or pop the most recently pushed one that the
         // ray still enters before t_limit.

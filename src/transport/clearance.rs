@@ -12,8 +12,9 @@
 //! x's plane in front of everything else. (A plane that ends in the open, with nothing beyond
 //! its edge, is not seen: no reference scene has one.)
 
-use crate::accel::bvh::STACK_SIZE;
+use crate::accel::bvh::{offer_nearest_first, STACK_SIZE};
 use crate::layout::{FlatScene, Triangle, EMPTY_SLOT, PRIM_PADDING, PRIM_SPHERE_BIT};
+use arrayvec::ArrayVec;
 use glam::Vec3;
 
 /// Two triangles lie in one plane when their unit normals agree to within this (|n₁ · n₂|
@@ -40,8 +41,7 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
     // first (at most three per level, `bvh::stack_size`), and a popped node that best2 has since
     // passed is dropped. Nearest first, the primitives that lower best2 are met soonest and fewer
     // boxes stay in reach; the minimum found is the same in any order.
-    let mut stack = [(0u32, 0f32); STACK_SIZE];
-    let mut top = 0usize;
+    let mut stack = ArrayVec::<(u32, f32), STACK_SIZE>::new();
     let mut current = 0u32;
     loop {
         let node = &scene.nodes[current as usize];
@@ -75,36 +75,20 @@ pub fn clearance(scene: &FlatScene, p: Vec3, prim: u32, bound: f32) -> f32 {
             }
         }
         let mut next: Option<(u32, f32)> = None;
-        let base = top;
+        let base = stack.len();
         for (c, &d2_box) in d2.iter().enumerate() {
             if node.count[c] != 0 || d2_box >= best2 {
                 continue;
             }
-            let mut entry = (node.child[c], d2_box);
-            match next {
-                None => {
-                    next = Some(entry);
-                    continue;
-                }
-                Some(n) if entry.1 < n.1 => {
-                    next = Some(entry);
-                    entry = n;
-                }
-                Some(_) => {}
-            }
-            // This node's pushes in decreasing distance: the nearest pops first.
-            let mut j = top;
-            stack[top] = entry;
-            top += 1;
-            while j > base && stack[j - 1].1 < stack[j].1 {
-                stack.swap(j - 1, j);
-                j -= 1;
-            }
+            offer_nearest_first((node.child[c], d2_box), &mut next, &mut stack, base);
         }
-        while next.is_none() && top > 0 {
-            top -= 1;
-            if stack[top].1 < best2 {
-                next = Some(stack[top]);
+        // Descend into the nearest interior child, or pop the most recently pushed one still in
+        // reach.
+        while next.is_none() {
+            match stack.pop() {
+                Some(entry) if entry.1 < best2 => next = Some(entry),
+                Some(_) => {}
+                None => break,
             }
         }
         match next {
