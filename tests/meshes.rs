@@ -792,16 +792,20 @@ fn the_gpu_renders_the_bunny_room_as_the_cpu_does() {
     if gpu().is_none() {
         return;
     }
+    assert_gpu_renders_as_cpu(Render::file("scenes/bunny_room.json"), "bunny_room");
+}
+
+/// The CPU (seed 1) and the GPU (seed 2) render `render` alike at 32x32 and 64 spp, by the
+/// parity test.
+fn assert_gpu_renders_as_cpu(render: Render, what: &str) {
     const SIZE: u32 = 32;
     const SPP: u32 = 64;
-    let render = Render::file("scenes/bunny_room.json")
-        .size(SIZE, SIZE)
-        .spp(SPP);
+    let render = render.size(SIZE, SIZE).spp(SPP);
     let a = render.seed(1).cpu();
     let b = render.seed(2).gpu();
     let p = parity::parity(&a, &b);
-    eprintln!("bunny_room at {SPP} spp, {SIZE}x{SIZE}: {p}");
-    assert!(p.same(), "bunny_room: {p}");
+    eprintln!("{what} at {SPP} spp, {SIZE}x{SIZE}: {p}");
+    assert!(p.same(), "{what}: {p}");
 }
 
 /// Above 4096 primitives each backend traverses a tree built for it (`bvh::Traversal`): the
@@ -811,8 +815,6 @@ fn the_gpu_renders_a_mesh_in_its_own_tree_as_the_cpu_does_in_its() {
     if gpu().is_none() {
         return;
     }
-    const SIZE: u32 = 32;
-    const SPP: u32 = 64;
     let tris = cut_bunny(2);
     let mesh = Mesh {
         v: tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).collect(),
@@ -835,15 +837,8 @@ fn the_gpu_renders_a_mesh_in_its_own_tree_as_the_cpu_does_in_its() {
         cpu_tree.nodes.len(),
         gpu_tree.nodes.len()
     );
-    let render = Render::scene(&scene).size(SIZE, SIZE).spp(SPP);
-    let a = render.seed(1).cpu();
-    let b = render.seed(2).gpu();
-    let p = parity::parity(&a, &b);
-    eprintln!(
-        "bunny_room cut into {} triangles at {SPP} spp, {SIZE}x{SIZE}: {p}",
-        tris.len()
-    );
-    assert!(p.same(), "{p}");
+    let what = format!("bunny_room cut into {} triangles", tris.len());
+    assert_gpu_renders_as_cpu(Render::scene(&scene), &what);
 }
 
 #[test]
