@@ -557,12 +557,14 @@ pub fn merge_camera_share(camera: &SubpathMis, merge: &MergeMis, camera_rev: f32
 /// interval (`tests/standard_error.rs`). The sweeps: docs/journal/2026-11-25_light_roulette.md.
 pub const LIGHT_SUBPATH_RR_START_BOUNCE: u32 = 1;
 
-/// τ of VCM's Russian roulette on merge queries ([`merge_survival`]), as a share of the
-/// camera subpath's throughput: 0.1. relMSE is flat from τ = 0.05 to 0.2 and rises again at 0.5
-/// and 1, since the roulette's variance falls on dark pixels, which relMSE weighs most. At 0.1,
-/// 57 % of the queries are skipped on tncg15_room and glass_room, for 1.14x and 1.10x the
-/// iterations and 0.90x and 0.93x the relMSE of no roulette (256x256, 30 s on 2 cores, seeds 43
-/// and 44), and the variance they add is 0.14 % and 0.11 % of the image's.
+/// τ of the Russian roulette on merge queries of VCM and vcm-full ([`merge_survival`]), as a
+/// share of the camera subpath's throughput: 0.1. vcm merges only at a camera subpath's first
+/// diffuse vertex, where the bound stays above 0.1 nearly everywhere: it skips 0.2 %, 0.3 % and
+/// 1 % of the queries on tncg15_room, glass_room and cornell_box, vcm-full 13 % and 16 % on the
+/// first two (256x256, 8 iterations). For vcm at 30 s on 2 cores (256x256, seeds 51 and 52),
+/// τ = 0.3 gives the same relMSE as 0.1, τ = 1 1.8 – 3.2x and τ = 3 8 – 18x: more iterations,
+/// but the roulette's variance falls on dark pixels, which relMSE weighs most
+/// (docs/journal/2026-11-30_merge_queue.md).
 pub const MERGE_RR_THRESHOLD: f32 = 0.1;
 
 /// Russian roulette on the merge query of a camera vertex (VCM): the probability of running
@@ -576,9 +578,8 @@ pub const MERGE_RR_THRESHOLD: f32 = 0.1;
 /// τ = [`MERGE_RR_THRESHOLD`] runs with probability b / τ and is divided by it, which keeps
 /// the estimate unbiased (E[Q 1{u < q} / q] = Q) and adds at most (1/q − 1) Q² of variance.
 /// SPPM, whose merges are its only strategy, runs every query (τ = 0). A merge query is not a
-/// ray: it costs about 400 ns of memory latency on the CPU, a third of a vcm iteration
-/// (docs/journal/2026-11-25_merge_queries.md), and most of it is spent where the other
-/// strategies carry the light.
+/// ray: it reads every grid entry of its buckets (about 460 on tncg15_room at 256x256 with the
+/// default radius), and where b is small the other strategies carry the light.
 #[inline]
 pub fn merge_survival(
     camera: &SubpathMis,
