@@ -255,6 +255,8 @@ impl HashGrid {
         self.finish_query_slots_within(query, self.params.radius2, visit)
     }
 
+    /// [`HashGrid::finish_query_slots`] within a radius of its own (`radius2`, its square; VCM's
+    /// vertices merge within their clearance, at most the grid's radius).
     #[inline]
     pub fn finish_query_slots_within(
         &self,
@@ -264,15 +266,111 @@ impl HashGrid {
     ) {
         for &b in &query.buckets[..query.n] {
             let (start, end) = (self.starts[b as usize], self.starts[b as usize + 1]);
-            for (j, e) in self.entries[start as usize..end as usize]
-                .iter()
-                .enumerate()
-            {
-                if (Vec3::new(e[0], e[1], e[2]) - query.p).length_squared() < radius2 {
-                    visit(start as usize + j);
-                }
+            within(
+                &self.entries[start as usize..end as usize],
+                query.p,
+                radius2,
+                |j| visit(start as usize + j),
+            );
+        }
+    }
+}
+
+/// Calls `visit(j)` for every entry j of `entries` whose position lies within the radius of `p`
+/// (|x − p|² < `radius2`), in order. Where the CPU has AVX, eight entries' distances are tested
+/// at once: a query reads some 460 entries to find the few within r (tncg15_room at 256x256), and
+/// one by one each test is a branch that the entry's place decides. The arithmetic is the
+/// scalar test's, operation for operation, so the same entries are found.
+#[inline]
+fn within(entries: &[[f32; 4]], p: Vec3, radius2: f32, mut visit: impl FnMut(usize)) {
+    let mut first = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked above).
+        first = unsafe { avx::within_by_eight(entries, p, radius2, &mut visit) };
+    }
+    for (j, e) in entries.iter().enumerate().skip(first) {
+        if (Vec3::new(e[0], e[1], e[2]) - p).length_squared() < radius2 {
+            visit(j);
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use glam::Vec3;
+    use std::arch::x86_64::*;
+
+    /// Bits 0..4 of the index spread to the even bits 0, 2, 4 and 6.
+    const EVEN_BITS: [u32; 16] = [
+        0b0000_0000,
+        0b0000_0001,
+        0b0000_0100,
+        0b0000_0101,
+        0b0001_0000,
+        0b0001_0001,
+        0b0001_0100,
+        0b0001_0101,
+        0b0100_0000,
+        0b0100_0001,
+        0b0100_0100,
+        0b0100_0101,
+        0b0101_0000,
+        0b0101_0001,
+        0b0101_0100,
+        0b0101_0101,
+    ];
+
+    /// `super::within` for the whole groups of eight of `entries`; returns where the rest
+    /// begins.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub(super) fn within_by_eight(
+        entries: &[[f32; 4]],
+        p: Vec3,
+        radius2: f32,
+        visit: &mut impl FnMut(usize),
+    ) -> usize {
+        let (px, py, pz) = (
+            _mm256_set1_ps(p.x),
+            _mm256_set1_ps(p.y),
+            _mm256_set1_ps(p.z),
+        );
+        let r2 = _mm256_set1_ps(radius2);
+        let groups = entries.len() / 8;
+        for g in 0..groups {
+            let e = &entries[8 * g..8 * g + 8];
+            // SAFETY: eight entries of four f32, two to a load.
+            let row = |k: usize| unsafe { _mm256_loadu_ps(e[2 * k].as_ptr()) };
+            let (r0, r1, r2_, r3) = (row(0), row(1), row(2), row(3));
+            // Entries 0, 2, 4, 6 in the low lanes and 1, 3, 5, 7 in the high ones.
+            let (t0, t1) = (_mm256_unpacklo_ps(r0, r1), _mm256_unpackhi_ps(r0, r1));
+            let (t2, t3) = (_mm256_unpacklo_ps(r2_, r3), _mm256_unpackhi_ps(r2_, r3));
+            let x = _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2);
+            let y = _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2);
+            let z = _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3);
+            // (x − p) · (x − p), added as `Vec3::length_squared` adds it.
+            let (dx, dy, dz) = (
+                _mm256_sub_ps(x, px),
+                _mm256_sub_ps(y, py),
+                _mm256_sub_ps(z, pz),
+            );
+            let d2 = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                _mm256_mul_ps(dz, dz),
+            );
+            let lanes = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(d2, r2)) as usize;
+            // Back to entry order: lane k is entry 2k, lane 4 + k entry 2k + 1.
+            let mut found = EVEN_BITS[lanes & 15] | EVEN_BITS[lanes >> 4] << 1;
+            while found != 0 {
+                visit(8 * g + found.trailing_zeros() as usize);
+                found &= found - 1;
             }
         }
+        8 * groups
     }
 }
 
@@ -301,6 +399,46 @@ fn prefetch<T>(x: &T) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `within` finds, tested one entry at a time.
+    fn within_one_by_one(entries: &[[f32; 4]], p: Vec3, radius2: f32) -> Vec<usize> {
+        (0..entries.len())
+            .filter(|&j| {
+                let e = entries[j];
+                (Vec3::new(e[0], e[1], e[2]) - p).length_squared() < radius2
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_distance_test_eight_at_a_time_finds_the_same_entries_in_order() {
+        let (p, r) = (Vec3::new(1.0, -2.0, 0.5), 0.5f32);
+        // Entries about p out to twice r, a few exactly on the rim (|x − p|² = r², not within),
+        // for every remainder of eight.
+        let mut state = 12345u32;
+        let mut next = || {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        for n in [0, 1, 7, 8, 9, 16, 23, 64, 461] {
+            let entries: Vec<[f32; 4]> = (0..n)
+                .map(|j| {
+                    let x = if j % 13 == 5 {
+                        p + Vec3::new(0.0, r, 0.0)
+                    } else {
+                        p + Vec3::new(next(), next(), next()) * (2.0 * r)
+                    };
+                    [x.x, x.y, x.z, f32::from_bits(j as u32)]
+                })
+                .collect();
+            let mut found = Vec::new();
+            within(&entries, p, r * r, |j| found.push(j));
+            assert_eq!(found, within_one_by_one(&entries, p, r * r), "{n} entries");
+            if n >= 64 {
+                assert!(!found.is_empty() && found.len() < n);
+            }
+        }
+    }
 
     #[test]
     fn grid_params_have_the_shader_layout() {
